@@ -1,0 +1,9 @@
+"""Visland's vision pipeline: pure functions from a frame to the pad's pose.
+
+``from pipeline import Camera, Reference, process_frame``
+"""
+
+from pipeline.camera import Camera
+from pipeline.result import FrameResult, Pose
+
+__all__ = ["Camera", "FrameResult", "Pose"]

@@ -1,0 +1,95 @@
+"""What the pipeline returns for a frame: frozen dataclasses, JSON-serialisable."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+def yaw_of(R_pad_cam: np.ndarray) -> float:
+    """The camera's yaw in the pad frame, degrees in (-180, 180].
+
+    The angle, counter-clockwise about pad +z, from pad +x to the camera's x axis
+    (image right) projected on the pad plane. A camera looking straight down that
+    sees the pad as in the reference picture has yaw 0.
+    """
+    x_axis = np.asarray(R_pad_cam)[:, 0]
+    return math.degrees(math.atan2(x_axis[1], x_axis[0]))
+
+
+@dataclass(frozen=True, eq=False)
+class Pose:
+    """The camera's pose over the pad.
+
+    ``position_m``: camera centre in the pad frame (origin at the pad centre, +x to
+    the reference picture's right edge, +y to its top edge, +z up out of the pad).
+    ``R_pad_cam``: rotation mapping camera-frame vectors (OpenCV: x right, y down,
+    z forward) into the pad frame. ``symmetric``: the pad looks the same after a
+    180 degree turn, so this pose and its turned twin fit equally well;
+    ``yaw_hint`` decides between them.
+    """
+
+    position_m: np.ndarray
+    R_pad_cam: np.ndarray
+    reprojection_px: float
+    symmetric: bool
+
+    @property
+    def yaw_deg(self) -> float:
+        return yaw_of(self.R_pad_cam)
+
+    @property
+    def altitude_m(self) -> float:
+        return float(self.position_m[2])
+
+    def to_dict(self) -> dict:
+        return {
+            "position_m": [float(v) for v in self.position_m],
+            "R_pad_cam": np.asarray(self.R_pad_cam, float).tolist(),
+            "yaw_deg": self.yaw_deg,
+            "reprojection_px": float(self.reprojection_px),
+            "symmetric": bool(self.symmetric),
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class FrameResult:
+    """The pipeline's findings on one frame.
+
+    ``corners_px``: the H's corners (N x 2, x then y, pixels of the input image),
+    in the reference's corner order when the H was matched. ``hu``: Hu's seven
+    invariants of the H's region (zeros when nothing was found). ``timings_ms``:
+    wall time per stage.
+    """
+
+    detected: bool
+    corners_px: np.ndarray
+    hu: tuple[float, ...]
+    orientation_deg: float
+    eccentricity: float
+    pose: Pose | None
+    timings_ms: dict[str, float]
+    contour_px: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    score: float = 0.0
+    reason: str = ""
+
+    def to_dict(self) -> dict:
+        return {
+            "detected": bool(self.detected),
+            "corners_px": np.asarray(self.corners_px, float).reshape(-1, 2).tolist(),
+            "hu": [_finite(v) for v in self.hu],
+            "orientation_deg": _finite(self.orientation_deg),
+            "eccentricity": _finite(self.eccentricity),
+            "pose": None if self.pose is None else self.pose.to_dict(),
+            "timings_ms": {k: float(v) for k, v in self.timings_ms.items()},
+            "contour_px": np.asarray(self.contour_px, float).reshape(-1, 2).tolist(),
+            "score": _finite(self.score),
+            "reason": self.reason,
+        }
+
+
+def _finite(value: float) -> float | None:
+    value = float(value)
+    return value if math.isfinite(value) else None
