@@ -4,6 +4,8 @@
 """
 
 from pipeline.camera import Camera
+from pipeline.frame import process_frame
+from pipeline.reference import Reference
 from pipeline.result import FrameResult, Pose
 
-__all__ = ["Camera", "FrameResult", "Pose"]
+__all__ = ["Camera", "FrameResult", "Pose", "Reference", "process_frame"]

@@ -1,0 +1,243 @@
+"""Model-based pose refinement on the pad's edges.
+
+Corners of a distant pad are poor evidence: the H's short sides (a stroke's
+end, a few pixels long) cannot be measured, and a pad 50 px wide seen nearly
+head-on leaves tilt and sideways position trading off against each other.
+Edges are better evidence: every long straight edge of the pad (the H's
+sides, the side bars', the board's outline) is sampled along its projection,
+the true edge is located on the gray image across it (strongest gradient of
+the expected polarity, sub-pixel), and the pose is adjusted by Gauss-Newton to
+minimise the distances of those edge points to the projected model edges,
+measured along the edge normals (the classic RAPiD / edge-tracking scheme).
+The projection's Jacobian comes from ``cv2.projectPoints``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from pipeline.camera import Camera
+
+MIN_SIDE_PX = 7.0  # sides shorter than this in the image are not sampled
+END_MARGIN_PX = 2.0  # stay this far from a side's corners
+SAMPLE_STEP_PX = 1.5
+MAX_SAMPLES_PER_SIDE = 40
+MIN_GRADIENT = 4.0
+
+
+@dataclass(frozen=True, eq=False)
+class EdgeModel:
+    """The pad's straight sides in pad metres, with what is needed to sample them."""
+
+    a_m: np.ndarray  # (S, 2) side starts
+    b_m: np.ndarray  # (S, 2) side ends
+    bright: np.ndarray  # (S,) the polygon is brighter than its surroundings
+    polygon: np.ndarray  # (S,) which polygon each side belongs to
+    clearance_m: np.ndarray  # (S,) distance to the nearest other side alongside
+
+    @classmethod
+    def from_polygons(cls, polygons: list[tuple[np.ndarray, bool]]) -> EdgeModel:
+        starts, ends, bright, owner = [], [], [], []
+        for k, (corners_m, is_bright) in enumerate(polygons):
+            c = np.asarray(corners_m, np.float64).reshape(-1, 2)
+            starts.append(c)
+            ends.append(np.roll(c, -1, axis=0))
+            bright.append(np.full(len(c), bool(is_bright)))
+            owner.append(np.full(len(c), k))
+        a, b = np.vstack(starts), np.vstack(ends)
+        return cls(a, b, np.concatenate(bright), np.concatenate(owner), _clearance_m(a, b))
+
+
+@dataclass(frozen=True, eq=False)
+class EdgeFit:
+    rvec: np.ndarray
+    tvec: np.ndarray
+    rms_px: float  # RMS distance of the inlier edge points to the model edges
+    inliers: int
+    sides: int  # model sides that contributed
+    support: float  # share of the pad's edge samples found where this pose puts them
+
+
+def fit_edges(
+    image: np.ndarray,
+    model: EdgeModel,
+    camera: Camera,
+    rvec: np.ndarray,
+    tvec: np.ndarray,
+    *,
+    iterations: int = 3,
+    search_px: float = 2.5,
+) -> EdgeFit | None:
+    """Refine a pose so that the pad's polygons' sides lie on the image's edges.
+
+    Parameters
+    ----------
+    image : smoothed gray frame (2-D).
+    model : the pad's sides (:meth:`EdgeModel.from_polygons`).
+    camera : intrinsics of ``image``.
+    rvec, tvec : starting pose (OpenCV pad -> camera).
+    """
+    img = image if image.dtype == np.float32 else image.astype(np.float32)
+    rvec = np.asarray(rvec, np.float64).reshape(3, 1).copy()
+    tvec = np.asarray(tvec, np.float64).reshape(3, 1).copy()
+    result = None  # (rvec, tvec, rms, inliers, sides) of the last good step
+    for it in range(iterations):
+        search = search_px if it == 0 else max(1.5, 0.6 * search_px)
+        samples = _samples(model, camera, rvec, tvec, search + 2.0)
+        if samples is None:
+            break
+        points, normal, side_id = samples
+        proj, jac = _project(points, rvec, tvec, camera)
+        delta, ok = _edge_offsets(img, proj, normal, search)
+        if np.count_nonzero(ok) < 12:
+            break
+        # Residual: how far the model edge lies from the found edge, along the normal.
+        r = -delta[ok]
+        J = np.einsum("nk,nkp->np", normal[ok], jac[ok])
+        keep = np.abs(r - np.median(r)) <= max(0.5, 3.0 * _mad(r))
+        r, J = r[keep], J[keep]
+        if len(r) < 12:
+            break
+        # Huber weights keep a few wrong edge hits from pulling the pose.
+        w = np.where(np.abs(r) <= 0.5, 1.0, 0.5 / np.maximum(np.abs(r), 1e-9))
+        JtW = J.T * w
+        H = JtW @ J + 1e-9 * np.eye(6)
+        try:
+            step = np.linalg.solve(H, -JtW @ r)
+        except np.linalg.LinAlgError:
+            break
+        rvec = rvec + step[:3, None]
+        tvec = tvec + step[3:, None]
+        if tvec[2, 0] <= 0:
+            return None
+        rms = float(np.sqrt(np.mean((r + J @ step) ** 2)))
+        sides = len(np.unique(side_id[ok][keep]))
+        result = (rvec.copy(), tvec.copy(), rms, len(r), sides)
+        if np.linalg.norm(step[:3]) < 2e-5 and np.linalg.norm(step[3:]) < 2e-5 * float(tvec[2, 0]):
+            break
+    if result is None:
+        return None
+    return EdgeFit(*result, support=_support(img, model, camera, result[0], result[1]))
+
+
+def _support(img: np.ndarray, model: EdgeModel, camera: Camera, rvec, tvec) -> float:
+    """Share of samples along all the pad's visible sides that sit on a real edge.
+
+    A look-alike shape can fit the H's corners, but the dark board around it,
+    the side bars and the board's outline will not be where the pose says.
+    """
+    samples = _samples(model, camera, rvec, tvec, 0.0)
+    if samples is None:
+        return 0.0
+    points, normal, _ = samples
+    proj, _ = _project(points, rvec, tvec, camera)
+    delta, ok = _edge_offsets(img, proj, normal, 1.5)
+    h, w = img.shape[:2]
+    seen = (proj[:, 0] > 2) & (proj[:, 1] > 2) & (proj[:, 0] < w - 3) & (proj[:, 1] < h - 3)
+    if not seen.any():
+        return 0.0
+    return float(np.mean((ok & (np.abs(delta) <= 0.75))[seen]))
+
+
+def _mad(x: np.ndarray) -> float:
+    return float(1.4826 * np.median(np.abs(x - np.median(x))))
+
+
+def _project(model: np.ndarray, rvec, tvec, camera: Camera):
+    pts = np.column_stack([model, np.zeros(len(model))])
+    proj, jac = cv2.projectPoints(pts, rvec, tvec, camera.K, camera.dist)
+    jac = jac[:, :6].reshape(len(model), 2, 6)
+    return proj.reshape(-1, 2), jac
+
+
+def _clearance_m(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """For each side, the distance to the nearest other side running alongside it.
+
+    Two parallel edges closer than the blur's reach bias each other's measured
+    position, so such sides are left out when the pad is small in the image.
+    """
+    d = b - a
+    length = np.hypot(d[:, 0], d[:, 1])
+    u = d / length[:, None]
+    mid = 0.5 * (a + b)
+    out = np.full(len(a), np.inf)
+    for i in range(len(a)):
+        parallel = np.abs(u[:, 0] * u[i, 1] - u[:, 1] * u[i, 0]) < 0.17
+        parallel[i] = False
+        if not parallel.any():
+            continue
+        rel = mid[parallel] - mid[i]
+        across = np.abs(rel[:, 0] * u[i, 1] - rel[:, 1] * u[i, 0])
+        along = np.abs(rel @ u[i])
+        beside = along < 0.5 * (length[i] + length[parallel])  # they overlap lengthwise
+        if beside.any():
+            out[i] = float(across[beside].min())
+    return out
+
+
+def _samples(model: EdgeModel, camera: Camera, rvec, tvec, min_clearance_px: float):
+    """Model points along every side measurable in the image, with image normals."""
+    a_m, b_m = model.a_m, model.b_m
+    ends, _ = _project(np.vstack([a_m, b_m]), rvec, tvec, camera)
+    pa, pb = ends[: len(a_m)], ends[len(a_m) :]
+    R, _ = cv2.Rodrigues(rvec)
+    depth = 0.5 * (a_m + b_m) @ R[2, :2] + float(tvec[2, 0])
+    clearance_px = model.clearance_m * camera.fx / np.maximum(depth, 1e-6)
+    # Each polygon's orientation in the image tells which way is outward;
+    # normals point from the bright side of an edge to the dark side.
+    cross = pa[:, 0] * pb[:, 1] - pb[:, 0] * pa[:, 1]
+    area = np.bincount(model.polygon, cross)
+    orient = np.where(area[model.polygon] > 0, 1.0, -1.0)
+    sign = np.where(model.bright, orient, -orient)
+    d = pb - pa
+    length = np.hypot(d[:, 0], d[:, 1])
+    use = np.flatnonzero((length >= MIN_SIDE_PX) & (clearance_px >= min_clearance_px))
+    if len(use) == 0:
+        return None
+    counts = np.clip((length[use] - 2 * END_MARGIN_PX) / SAMPLE_STEP_PX, 3, MAX_SAMPLES_PER_SIDE)
+    counts = counts.astype(int)
+    side = np.repeat(use, counts)
+    first = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    k = np.arange(len(side)) - np.repeat(first, counts)
+    f = END_MARGIN_PX / length[side]
+    t = f + (1 - 2 * f) * k / np.maximum(np.repeat(counts, counts) - 1, 1)
+    points = a_m[side] + t[:, None] * (b_m[side] - a_m[side])
+    u = d[side] / length[side][:, None]
+    normal = sign[side][:, None] * np.column_stack([u[:, 1], -u[:, 0]])
+    return points, normal, side
+
+
+_OFFSETS = np.arange(-3.0, 3.01, 0.5)
+
+
+def _edge_offsets(img: np.ndarray, proj: np.ndarray, normal: np.ndarray, search: float):
+    """Signed distance along each normal from the projected point to the image edge."""
+    offsets = _OFFSETS[np.abs(_OFFSETS) <= search + 1e-6]
+    step = float(offsets[1] - offsets[0])
+    pts = proj[:, None, :] + offsets[None, :, None] * normal[:, None, :]
+    samples = cv2.remap(
+        img,
+        pts[..., 0].astype(np.float32),
+        pts[..., 1].astype(np.float32),
+        cv2.INTER_LINEAR,
+        borderMode=cv2.BORDER_REPLICATE,
+    )
+    grad = -np.diff(samples, axis=1)  # bright-to-dark along the normal is positive
+    k = np.argmax(grad, axis=1)
+    rows = np.arange(len(proj))
+    inside_image = (
+        (proj[:, 0] > 2)
+        & (proj[:, 1] > 2)
+        & (proj[:, 0] < img.shape[1] - 3)
+        & (proj[:, 1] < img.shape[0] - 3)
+    )
+    ok = (k > 0) & (k < grad.shape[1] - 1) & (grad[rows, k] > MIN_GRADIENT) & inside_image
+    kk = np.clip(k, 1, grad.shape[1] - 2)
+    g0, g1, g2 = grad[rows, kk - 1], grad[rows, kk], grad[rows, kk + 1]
+    den = g0 - 2 * g1 + g2
+    sub = np.where(np.abs(den) > 1e-9, 0.5 * (g0 - g2) / np.where(den == 0, 1.0, den), 0.0)
+    delta = offsets[0] + (kk + 0.5 + np.clip(sub, -0.5, 0.5)) * step
+    return delta, ok

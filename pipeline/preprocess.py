@@ -1,0 +1,106 @@
+"""Frame preprocessing: input checks, subsampling, gray conversion, thresholding.
+
+Two thresholding methods, both selectable:
+
+``"seed"``
+    The dissertation's chain (section 4.1.1): BT.601 gray, a 3x3 Laplacian
+    added back to the gray image, a 3x3 average of that, added to the gray
+    image again, then a global threshold at 85 % of full scale. It breaks when
+    the light changes: measured in ``python -m pipeline.bench``.
+``"otsu"``
+    Gaussian smoothing (for the sensor noise) and Otsu's global threshold,
+    which adapts to exposure. The default: it measured better (see the bench).
+``"adaptive"``
+    Gaussian smoothing and a local mean threshold: immune to light gradients,
+    but it fragments textured floors into many small regions.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+METHODS = ("otsu", "adaptive", "seed")
+WORK_WIDTH = 640  # the seed's working resolution: 640 x 480
+
+
+def check_image(image: object, name: str = "image_bgr") -> np.ndarray:
+    """Return ``image`` as a BGR uint8 array, or raise ValueError naming ``name``."""
+    if image is None:
+        raise ValueError(f"{name} is None; expected an H x W x 3 uint8 BGR image")
+    if not isinstance(image, np.ndarray):
+        raise ValueError(f"{name} must be a numpy array, got {type(image).__name__}")
+    if image.dtype != np.uint8:
+        raise ValueError(f"{name} must have dtype uint8, got {image.dtype}")
+    if image.ndim == 2:
+        image = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
+    elif image.ndim == 3 and image.shape[2] == 4:
+        image = cv2.cvtColor(image, cv2.COLOR_BGRA2BGR)
+    elif not (image.ndim == 3 and image.shape[2] == 3):
+        raise ValueError(f"{name} must be H x W x 3 (BGR) or H x W, got shape {image.shape}")
+    if image.shape[0] < 16 or image.shape[1] < 16:
+        raise ValueError(f"{name} is too small ({image.shape[1]}x{image.shape[0]}); need >= 16x16")
+    return image
+
+
+def subsample(image: np.ndarray, max_width: int = WORK_WIDTH) -> tuple[np.ndarray, float]:
+    """Shrink ``image`` to at most ``max_width`` columns (area interpolation).
+
+    Returns the image and the scale factor (work pixels per input pixel).
+    """
+    width = image.shape[1]
+    if width <= max_width:
+        return image, 1.0
+    scale = max_width / width
+    height = max(1, round(image.shape[0] * scale))
+    return cv2.resize(image, (max_width, height), interpolation=cv2.INTER_AREA), scale
+
+
+def to_gray(image_bgr: np.ndarray) -> np.ndarray:
+    """BT.601 luma (0.299 R + 0.587 G + 0.114 B), as cv2.cvtColor computes it."""
+    return cv2.cvtColor(image_bgr, cv2.COLOR_BGR2GRAY)
+
+
+@dataclass(frozen=True, eq=False)
+class Binarized:
+    """A frame ready for shape analysis: smoothed gray (for sub-pixel edges) and mask."""
+
+    gray: np.ndarray
+    smooth: np.ndarray
+    mask: np.ndarray
+    threshold: float
+
+
+def seed_enhance(gray: np.ndarray) -> np.ndarray:
+    """The seed's Laplacian + average enhancement (MATLAB fspecial defaults), float32."""
+    g = gray.astype(np.float32)
+    # fspecial('laplacian', 0.2): centre -10/3, edges 2/3, diagonals 1/6.
+    lap_kernel = np.array([[1, 4, 1], [4, -20, 4], [1, 4, 1]], np.float32) / 6.0
+    lap = cv2.filter2D(g, -1, lap_kernel, borderType=cv2.BORDER_REPLICATE)
+    # The centre is negative, so the sharpened image is gray - Laplacian.
+    sharp = np.clip(g - lap, 0, 255)
+    smoothed = cv2.blur(sharp, (3, 3), borderType=cv2.BORDER_REPLICATE)
+    # MATLAB adds uint8 images with saturation: gray + smoothed, clipped at 255.
+    return np.clip(g + smoothed, 0, 255)
+
+
+def binarize(image_bgr: np.ndarray, method: str = "otsu") -> Binarized:
+    """Threshold a BGR frame: white paint -> 255, everything else -> 0."""
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    gray = to_gray(image_bgr)
+    smooth = cv2.GaussianBlur(gray, (5, 5), 1.0)
+    if method == "otsu":
+        t, mask = cv2.threshold(smooth, 0, 255, cv2.THRESH_BINARY | cv2.THRESH_OTSU)
+    elif method == "adaptive":
+        mask = cv2.adaptiveThreshold(
+            smooth, 255, cv2.ADAPTIVE_THRESH_MEAN_C, cv2.THRESH_BINARY, 41, -12
+        )
+        t = float("nan")
+    else:
+        enhanced = seed_enhance(gray)
+        t = 0.85 * 255.0
+        mask = np.where(enhanced > t, 255, 0).astype(np.uint8)
+    return Binarized(gray=gray, smooth=smooth, mask=mask, threshold=float(t))

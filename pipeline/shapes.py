@@ -1,0 +1,124 @@
+"""Shapes in a binary mask: candidate regions and their polygon corners."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from pipeline.css import css_corners
+from pipeline.edges import signed_area
+
+
+@dataclass(frozen=True, eq=False)
+class Region:
+    """One white region's boundary, oriented with positive signed area."""
+
+    contour: np.ndarray  # (N, 2) int32, x y
+    area: float
+    solidity: float
+
+
+def regions(mask: np.ndarray, *, min_area: float, max_area: float) -> list[Region]:
+    """Boundaries of white regions with area in [min_area, max_area].
+
+    Every boundary is listed (RETR_LIST): the H sits inside the dark board,
+    which may itself sit inside a bright floor region. Hole boundaries are
+    dropped by their orientation.
+    """
+    contours, _ = cv2.findContours(mask, cv2.RETR_LIST, cv2.CHAIN_APPROX_NONE)
+    min_len = max(8, int(2 * np.sqrt(min_area)))
+    out = []
+    for c in contours:
+        if len(c) < min_len:
+            continue
+        signed = cv2.contourArea(c, oriented=True)
+        area = abs(signed)
+        if not min_area <= area <= max_area:
+            continue
+        # findContours traces outer boundaries one way and holes the other;
+        # an outer boundary of a white region has negative oriented area here.
+        if signed > 0:
+            continue
+        hull_area = cv2.contourArea(cv2.convexHull(c))
+        pts = c.reshape(-1, 2)[::-1].copy()  # flip to positive orientation
+        out.append(Region(pts, area, area / hull_area if hull_area > 0 else 0.0))
+    return out
+
+
+def polygon_corners(contour: np.ndarray, count: int) -> np.ndarray | None:
+    """``count`` corner points of a closed contour, in contour order, or None.
+
+    Curvature-scale-space corners first (the seed's detector); when they do not
+    come to ``count``, a Douglas-Peucker polygon with exactly ``count`` vertices.
+    """
+    pts = np.asarray(contour).reshape(-1, 2)
+    perimeter = len(pts)
+    sigma = float(np.clip(perimeter / 120.0, 1.0, 3.0))
+    idx = css_corners(pts, True, sigma=sigma)
+    if len(idx) == count:
+        out = pts[np.sort(idx)].astype(np.float64)
+        return out if signed_area(out) > 0 else None
+    approx = _douglas_peucker(pts, count)
+    if approx is None:
+        return None
+    return approx if signed_area(approx) > 0 else None
+
+
+def _douglas_peucker(pts: np.ndarray, count: int) -> np.ndarray | None:
+    """A polygon of exactly ``count`` vertices, by bisection on the tolerance."""
+    curve = pts.reshape(-1, 1, 2).astype(np.int32)
+    length = cv2.arcLength(curve, True)
+    lo, hi = 0.002 * length, 0.08 * length
+    for _ in range(12):
+        eps = 0.5 * (lo + hi)
+        approx = cv2.approxPolyDP(curve, eps, True).reshape(-1, 2)
+        if len(approx) == count:
+            return approx.astype(np.float64)
+        if len(approx) > count:
+            lo = eps
+        else:
+            hi = eps
+    return None
+
+
+def upsampled_contour(
+    smooth: np.ndarray, mask: np.ndarray, region: Region, factor: int = 4
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """The region's boundary traced again on a ``factor`` times finer grid.
+
+    A small H (strokes of 4-6 px) has too few boundary pixels for its corners;
+    interpolating the gray image and thresholding it again, half-way between
+    the region's own gray level and its surroundings', gives a boundary that
+    follows the true edge between pixels. Returns the fine-grid integer points
+    (positively oriented) and the offset such that a fine point p lies at
+    ``(p + 0.5) / factor - 0.5 + offset`` in the frame.
+    """
+    x, y, w, h = cv2.boundingRect(region.contour.reshape(-1, 1, 2).astype(np.int32))
+    pad = 3
+    x0, y0 = max(x - pad, 0), max(y - pad, 0)
+    x1, y1 = min(x + w + pad, smooth.shape[1]), min(y + h + pad, smooth.shape[0])
+    crop = smooth[y0:y1, x0:x1]
+    inside = mask[y0:y1, x0:x1] > 0
+    if inside.all() or not inside.any():
+        return None
+    threshold = 0.5 * (float(crop[inside].mean()) + float(crop[~inside].mean()))
+    big = cv2.resize(crop, None, fx=factor, fy=factor, interpolation=cv2.INTER_LINEAR)
+    fine = np.where(big > threshold, 255, 0).astype(np.uint8)
+    contours, _ = cv2.findContours(fine, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    if not contours:
+        return None
+    want = region.area * factor * factor
+    best = min(contours, key=lambda c: abs(cv2.contourArea(c) - want))
+    if abs(cv2.contourArea(best) - want) > 0.35 * want:
+        return None
+    return best.reshape(-1, 2)[::-1].copy(), np.array([x0, y0], np.float64)
+
+
+def corner_angles(poly: np.ndarray) -> np.ndarray:
+    """Interior angles of a positively oriented polygon, degrees (concave > 180)."""
+    prev = np.roll(poly, 1, axis=0) - poly
+    nxt = np.roll(poly, -1, axis=0) - poly
+    a = np.degrees(np.arctan2(prev[:, 1], prev[:, 0]) - np.arctan2(nxt[:, 1], nxt[:, 0]))
+    return np.mod(a, 360.0)

@@ -1,0 +1,114 @@
+import cv2
+import numpy as np
+import pytest
+
+from pipeline import Reference
+from pipeline.render import PadGeometry, make_lookalike, make_pad_image
+
+
+@pytest.fixture(scope="module")
+def pad():
+    return make_pad_image(1100)
+
+
+def test_finds_the_twelve_corners_in_pad_metres(pad):
+    ref = Reference.from_image(pad, 0.55)
+    truth = PadGeometry(size_m=0.55).h_corners_m
+    d = np.linalg.norm(ref.corners_m[:, None] - truth[None], axis=2)
+    assert d.min(axis=1).max() < 0.001  # within a millimetre
+    assert sorted(d.argmin(axis=1).tolist()) == list(range(12))  # a one-to-one match
+
+
+def test_corner_order_follows_the_contour(pad):
+    ref = Reference.from_image(pad, 0.55)
+    steps = np.diff(np.vstack([ref.corners_m, ref.corners_m[:1]]), axis=0)
+    # Consecutive corners are joined by the H's sides: axis-parallel steps.
+    assert np.all(np.min(np.abs(steps), axis=1) < 1e-3)
+
+
+def test_side_bars_outline_and_symmetry(pad):
+    ref = Reference.from_image(pad, 0.55)
+    assert len(ref.bars_m) == 2
+    assert ref.outline_m is not None
+    np.testing.assert_allclose(np.abs(ref.outline_m), 0.275, atol=1e-9)
+    assert ref.symmetric
+
+
+def test_scales_with_the_pad_size(pad):
+    small = Reference.from_image(pad, 0.55)
+    big = Reference.from_image(pad, 1.10)
+    np.testing.assert_allclose(big.corners_m, 2 * small.corners_m, atol=1e-9)
+
+
+def test_a_large_photo_like_the_seeds(pad):
+    # The seed's photo was 2592 x 1944: the pad's width is pad_size_m, its height follows.
+    photo = cv2.resize(pad, (2592, 1944), interpolation=cv2.INTER_AREA)
+    ref = Reference.from_image(photo, 0.55)
+    assert ref.pad_height_m == pytest.approx(0.55 * 1944 / 2592)
+    assert ref.corners_m[:, 1].max() == pytest.approx(0.1375 * 1944 / 2592, abs=0.002)
+    assert ref.corners_px.max(axis=0)[0] > 1500  # reported in the photo's own pixels
+
+
+def test_invariants_match_opencv(pad):
+    ref = Reference.from_image(pad, 0.55)
+    mask = np.zeros(pad.shape[:2], np.uint8)
+    g = PadGeometry(size_m=0.55)
+    px = (g.h_corners_m * np.array([1, -1]) / 0.55 + 0.5) * pad.shape[1] - 0.5
+    cv2.fillPoly(mask, [np.round(px).astype(np.int32)], 255)
+    hu = cv2.HuMoments(cv2.moments(mask, binaryImage=True)).ravel()
+    # The reference's moments come from the traced boundary, which runs half a
+    # pixel inside the painted edge: Hu 2 (a small difference) moves most.
+    assert ref.hu[0] == pytest.approx(hu[0], rel=0.02)
+    assert ref.hu[1] == pytest.approx(hu[1], rel=0.08)
+
+
+def test_an_off_centre_h_is_not_symmetric():
+    pad = make_pad_image(800)
+    shifted = np.zeros_like(pad)
+    shifted[:, 60:] = pad[:, :-60]
+    shifted[:, :60] = pad[:, :1]
+    ref = Reference.from_image(shifted, 0.55)
+    assert not ref.symmetric
+
+
+@pytest.mark.parametrize(
+    ("picture", "message"),
+    [
+        (np.zeros((400, 400, 3), np.uint8), "no white shape"),
+        (np.full((400, 400, 3), 255, np.uint8), "no white shape"),
+    ],
+)
+def test_pictures_without_an_h_are_refused(picture, message):
+    with pytest.raises(ValueError, match=message):
+        Reference.from_image(picture, 0.55)
+
+
+@pytest.mark.parametrize("kind", ["rectangle", "II", "letter", "cross", "h_no_bar"])
+def test_lookalikes_are_not_taken_for_an_h(kind):
+    mask = make_lookalike(kind, 300, np.random.default_rng(3))
+    picture = np.zeros((500, 500, 3), np.uint8)
+    picture[100:400, 100:400][mask > 0] = 255
+    with pytest.raises(ValueError, match=r"no usable H|no white shape"):
+        Reference.from_image(picture, 0.55)
+
+
+@pytest.mark.parametrize(
+    ("size", "message"),
+    [(0, "pad_size_m"), (-1, "pad_size_m"), (float("nan"), "pad_size_m"), ("big", "pad_size_m")],
+)
+def test_bad_pad_size(pad, size, message):
+    with pytest.raises(ValueError, match=message):
+        Reference.from_image(pad, size)
+
+
+def test_bad_image():
+    with pytest.raises(ValueError, match="image_bgr"):
+        Reference.from_image(None, 0.55)
+
+
+def test_to_dict_is_json_ready(pad):
+    import json
+
+    d = Reference.from_image(pad, 0.55).to_dict()
+    assert len(d["corners_m"]) == 12
+    json.dumps(d)
