@@ -1,0 +1,181 @@
+// Reference panel: upload a helipad picture with its size, see what the pipeline
+// extracted from it (threshold mask, numbered corners), its corners in metres and
+// its invariants; pick an earlier reference again.
+
+import { ApiError } from "../lib/api";
+import { fmt, fmtDate, fmtSci } from "../lib/format";
+import type { ReferenceSummary } from "../lib/protocol";
+import { type Ctx, h, panel, setText } from "./dom";
+
+export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
+  const { api, store } = ctx;
+  const file = h("input", { type: "file", accept: "image/*", class: "input", "data-testid": "reference-file", "aria-label": "Reference picture" });
+  const size = h("input", {
+    type: "number",
+    class: "input input-num",
+    min: "0.01",
+    max: "20",
+    step: "0.01",
+    value: "0.55",
+    "data-testid": "reference-size",
+    "aria-label": "Pad size in metres",
+  });
+  const upload = h("button", { class: "btn btn-primary btn-fixed", type: "button", "data-testid": "reference-upload" }, "Upload");
+  const uploadState = h("div", { class: "caption", "data-testid": "reference-upload-state" });
+  const form = h(
+    "div",
+    { class: "control-row wrap" },
+    file,
+    h("label", { class: "stat-label" }, "Pad size"),
+    size,
+    h("span", { class: "unit" }, "m"),
+    upload,
+  );
+
+  const title = h("div", { class: "ref-title", "data-testid": "reference-name" }, "No active reference");
+  const meta = h("div", { class: "caption", "data-testid": "reference-meta" });
+  const imgThreshold = h("img", { class: "ref-img", alt: "threshold mask of the reference", "data-testid": "reference-threshold" });
+  const imgCorners = h("img", { class: "ref-img", alt: "corners found on the reference", "data-testid": "reference-corners-img" });
+  const images = h(
+    "div",
+    { class: "ref-images" },
+    h("figure", {}, imgThreshold, h("figcaption", {}, "threshold")),
+    h("figure", {}, imgCorners, h("figcaption", {}, "corners")),
+  );
+  const cornersBody = h("tbody", { "data-testid": "reference-corners" });
+  const cornersTable = h(
+    "table",
+    { class: "data-table compact" },
+    h("thead", {}, h("tr", {}, h("th", {}, "#"), h("th", {}, "x (m)"), h("th", {}, "y (m)"))),
+    cornersBody,
+  );
+  const invBody = h("tbody", { "data-testid": "reference-invariants" });
+  const invTable = h("table", { class: "data-table compact" }, invBody);
+  const list = h("ul", { class: "ref-list", "data-testid": "reference-list" });
+
+  root.append(
+    panel(
+      "Reference pad",
+      "reference",
+      form,
+      uploadState,
+      h(
+        "div",
+        { class: "ref-layout" },
+        h("div", { class: "ref-main" }, title, meta, images),
+        h("div", { class: "ref-tables" }, cornersTable, invTable),
+      ),
+      h("h3", { class: "sub-title" }, "Earlier references"),
+      list,
+    ),
+  );
+
+  let shownId: string | null = null;
+  function show(ref: ReferenceSummary | null): void {
+    if (!ref) {
+      setText(title, "No active reference");
+      setText(meta, "");
+      cornersBody.replaceChildren();
+      invBody.replaceChildren();
+      imgThreshold.removeAttribute("src");
+      imgCorners.removeAttribute("src");
+      shownId = null;
+      return;
+    }
+    setText(title, `${ref.name} ${ref.active ? "· active" : ""}`);
+    setText(
+      meta,
+      `pad ${fmt(ref.pad_size_m, 2, "m")} · ${ref.image_size?.[0] ?? "?"}×${ref.image_size?.[1] ?? "?"} px · ` +
+        `${ref.corners_m.length} corners · ${ref.symmetric ? "symmetric (180° ambiguity resolved by heading)" : "asymmetric"} · ` +
+        `added ${fmtDate(ref.created)}`,
+    );
+    const key = String(ref.id);
+    if (key !== shownId) {
+      shownId = key;
+      imgThreshold.src = api.url(ref.images.threshold);
+      imgCorners.src = api.url(ref.images.corners);
+    }
+    cornersBody.replaceChildren(
+      ...ref.corners_m.map(([x, y], i) =>
+        h("tr", {}, h("td", {}, String(i + 1)), h("td", { class: "num" }, fmt(x, 3)), h("td", { class: "num" }, fmt(y, 3))),
+      ),
+    );
+    invBody.replaceChildren(
+      ...ref.hu.map((v, i) => h("tr", {}, h("th", {}, `Hu ${i + 1}`), h("td", { class: "num" }, fmtSci(v)))),
+      h("tr", {}, h("th", {}, "Orientation"), h("td", { class: "num" }, fmt(ref.orientation_deg, 1, "°"))),
+      h("tr", {}, h("th", {}, "Eccentricity"), h("td", { class: "num" }, fmt(ref.eccentricity, 3))),
+    );
+  }
+
+  async function refreshList(): Promise<void> {
+    try {
+      const refs = await api.references();
+      list.replaceChildren(
+        ...refs
+          .slice()
+          .reverse()
+          .map((r) => {
+            const activate = h("button", { class: "btn btn-small btn-secondary btn-fixed", type: "button", "data-testid": `activate-${r.id}` }, "Activate");
+            activate.disabled = r.active;
+            activate.addEventListener("click", async () => {
+              activate.disabled = true;
+              try {
+                const s = await api.activateReference(r.id);
+                store.setReference(s);
+                setText(uploadState, `Reference '${s.name}' is active.`);
+                uploadState.dataset.ok = "true";
+              } catch (error) {
+                setText(uploadState, `Could not activate: ${(error as Error).message}`);
+                uploadState.dataset.ok = "false";
+                if (error instanceof ApiError && error.status === 401) document.dispatchEvent(new CustomEvent("visland:need-token"));
+              }
+              void refreshList();
+            });
+            return h(
+              "li",
+              { class: r.active ? "active" : "" },
+              h("span", { class: "ref-list-name" }, r.name),
+              h("span", { class: "caption" }, `${fmt(r.pad_size_m, 2, "m")} · ${fmtDate(r.created)}`),
+              r.active ? h("span", { class: "tag" }, "active") : activate,
+            );
+          }),
+      );
+      if (refs.length === 0) list.append(h("li", { class: "empty" }, "None yet"));
+    } catch (error) {
+      list.replaceChildren(h("li", { class: "empty" }, `Cannot list references: ${(error as Error).message}`));
+    }
+  }
+
+  upload.addEventListener("click", async () => {
+    const f = file.files?.[0];
+    if (!f) {
+      setText(uploadState, "Choose a picture of the pad first.");
+      uploadState.dataset.ok = "false";
+      return;
+    }
+    upload.disabled = true;
+    setText(uploadState, `Uploading ${f.name}…`);
+    delete uploadState.dataset.ok;
+    try {
+      const s = await api.uploadReference(f, Number(size.value), f.name);
+      store.setReference(s);
+      setText(uploadState, `Reference '${s.name}' uploaded: ${s.corners_m.length} corners found.`);
+      uploadState.dataset.ok = "true";
+      void refreshList();
+    } catch (error) {
+      const e = error as ApiError;
+      setText(uploadState, `Upload refused${e.status ? ` (${e.status})` : ""}: ${e.message}. The previous reference stays active.`);
+      uploadState.dataset.ok = "false";
+      if (e.status === 401) document.dispatchEvent(new CustomEvent("visland:need-token"));
+    } finally {
+      upload.disabled = false;
+    }
+  });
+
+  store.subscribe("reference", () => {
+    show(store.reference);
+    void refreshList();
+  });
+  show(store.reference);
+  void refreshList();
+}

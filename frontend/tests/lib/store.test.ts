@@ -1,0 +1,176 @@
+import { describe, expect, it } from "vitest";
+import { encodeBinaryFrame, type FrameMessage, type ServerMessage, type Status } from "../../src/lib/protocol";
+import { Store } from "../../src/lib/store";
+
+const STATUS: Status = {
+  link: { state: "up", url: "tcp:127.0.0.1:5760", heartbeat_age_s: 0.2 },
+  camera: { name: "sim", state: "running" },
+  pipeline: { fps: 20 },
+  mission: null,
+  reference: null,
+  flight: null,
+  viser_url: "http://127.0.0.1:8080",
+};
+
+const REF = {
+  id: 1,
+  name: "pad",
+  pad_size_m: 0.55,
+  created: "2026-11-22T11:00:00Z",
+  active: true,
+  corners_m: [] as [number, number][],
+  hu: [0.2, 0.01, 0, 0, 0, 0, 0],
+  orientation_deg: 0,
+  eccentricity: 1.1,
+  symmetric: true,
+  image_size: [640, 480] as [number, number],
+  images: { original: "/o", threshold: "/t", corners: "/c" },
+};
+
+function frame(seq: number, detected = true): FrameMessage {
+  return {
+    type: "frame",
+    seq,
+    t_capture: 1000 + seq,
+    latency_ms: 12,
+    width: 640,
+    height: 480,
+    result: {
+      detected,
+      corners_px: [],
+      hu: [0.2, 0.01, 0, 0, 0, 0, 0],
+      orientation_deg: 5,
+      eccentricity: 1.2,
+      pose: null,
+      timings_ms: {},
+      contour_px: [],
+      score: 0.9,
+      reason: "",
+    },
+    overlay: { contour: [], corners: [], reference_corners: [], axes: null, target: null },
+    reference_distance: 0.01 * seq,
+  };
+}
+
+describe("Store", () => {
+  it("takes the whole state from hello and tells each topic", () => {
+    let clock = 5000;
+    const store = new Store({ now: () => clock });
+    const heard: string[] = [];
+    store.subscribe(["status", "telemetry", "reference", "settings"], () => heard.push("x"));
+    store.subscribe("telemetry", () => heard.push("telemetry"));
+    const hello: ServerMessage = {
+      type: "hello",
+      status: { ...STATUS, reference: REF },
+      telemetry: { armed: false, mode: "STABILIZE" },
+      reference: REF,
+      settings: { record_frames: true },
+    };
+    store.apply(hello);
+    expect(store.status?.link.state).toBe("up");
+    expect(store.telemetry).toEqual({ armed: false, mode: "STABILIZE" });
+    expect(store.telemetryAt).toBe(5000);
+    expect(store.reference?.id).toBe(1);
+    expect(store.settings).toEqual({ record_frames: true });
+    expect(heard).toContain("telemetry");
+    clock = 6000;
+    store.apply({ type: "telemetry", armed: true });
+    expect(store.telemetry).toEqual({ armed: true });
+    expect(store.telemetryAt).toBe(6000);
+  });
+
+  it("follows the active reference through status messages", () => {
+    const store = new Store();
+    let refs = 0;
+    store.subscribe("reference", () => (refs += 1));
+    store.apply({ type: "status", ...STATUS });
+    expect(refs).toBe(0);
+    store.apply({ type: "status", ...STATUS, reference: REF });
+    store.apply({ type: "status", ...STATUS, reference: REF });
+    expect(refs).toBe(1);
+    store.apply({ type: "status", ...STATUS, reference: { ...REF, id: 2 } });
+    expect(refs).toBe(2);
+    expect(store.reference?.id).toBe(2);
+  });
+
+  it("keeps a bounded history of invariants and pairs images with their frame", () => {
+    const store = new Store({ historySize: 5 });
+    for (let seq = 1; seq <= 40; seq += 1) store.apply(frame(seq, seq % 2 === 0));
+    expect(store.history.length).toBe(5);
+    expect(store.history.toArray().map((s) => s.seq)).toEqual([36, 37, 38, 39, 40]);
+    expect(store.history.last()).toMatchObject({ detected: true, distance: 0.4, orientationDeg: 5 });
+    expect(store.frameFor(40)?.seq).toBe(40);
+    expect(store.frameFor(25)?.seq).toBe(25);
+    expect(store.frameFor(3)).toBeNull(); // only the recent ones are kept
+    expect(store.frame?.seq).toBe(40);
+  });
+
+  it("keeps camera and threshold images apart and counts the camera rate", () => {
+    let clock = 0;
+    const store = new Store({ now: () => clock });
+    const jpeg = new Uint8Array([0xff, 0xd8, 0, 0]);
+    let images = 0;
+    store.subscribe("image", () => (images += 1));
+    for (let i = 0; i < 11; i += 1) {
+      clock = i * 100;
+      const wire = encodeBinaryFrame({ kind: "camera", seq: i, t_capture: i, width: 2, height: 2 }, jpeg);
+      store.applyImage({ header: { kind: "camera", seq: i, t_capture: i, width: 2, height: 2 }, jpeg: wire });
+    }
+    store.applyImage({ header: { kind: "threshold", seq: 10, t_capture: 10, width: 2, height: 2 }, jpeg });
+    expect(images).toBe(12);
+    expect(store.cameraImage?.header.seq).toBe(10);
+    expect(store.thresholdImage?.header.seq).toBe(10);
+    expect(store.frameRate.rate(1000)).toBeCloseTo(10, 5);
+  });
+
+  it("logs server and local events in one bounded list", () => {
+    const store = new Store({ eventsSize: 3, now: () => 2000 });
+    store.apply({ type: "event", kind: "link_lost", text: "Link lost", t: 1 });
+    store.addEvent("command", "arm: ACCEPTED");
+    store.apply({ type: "event", kind: "statustext", text: "a", t: 2 });
+    store.apply({ type: "event", kind: "statustext", text: "b", t: 3 });
+    expect(store.events.toArray().map((e) => e.text)).toEqual(["arm: ACCEPTED", "a", "b"]);
+    expect(store.events.toArray()[0]).toMatchObject({ kind: "command", t: 2, local: true });
+  });
+
+  it("a failing listener does not stop the others; unsubscribe works", () => {
+    const store = new Store();
+    let good = 0;
+    const original = console.error;
+    console.error = () => {};
+    try {
+      store.subscribe("connection", () => {
+        throw new Error("bug");
+      });
+      const off = store.subscribe("connection", () => (good += 1));
+      store.setConnection("open");
+      off();
+      store.setConnection("reconnecting");
+    } finally {
+      console.error = original;
+    }
+    expect(good).toBe(1);
+    expect(store.connection).toBe("reconnecting");
+  });
+
+  it("keeps the heartbeat age growing when the server's figure freezes or stops", () => {
+    let clock = 0;
+    const store = new Store({ now: () => clock });
+    expect(store.heartbeatAgeS()).toBeNull();
+    store.setTelemetry({ heartbeat_age_s: 0.2 });
+    clock = 100;
+    store.setTelemetry({ heartbeat_age_s: 0.3 });
+    expect(store.heartbeatAgeS()).toBeCloseTo(0.3, 9);
+    // link lost: the server keeps sending the same frozen age
+    for (let i = 1; i <= 20; i += 1) {
+      clock = 100 + i * 100;
+      store.setTelemetry({ heartbeat_age_s: 0.3 });
+    }
+    expect(store.heartbeatAgeS()).toBeCloseTo(2.3, 9);
+    // the server goes silent too
+    clock = 5100;
+    expect(store.heartbeatAgeS()).toBeCloseTo(5.3, 9);
+    store.setTelemetry({ heartbeat_age_s: null });
+    expect(store.heartbeatAgeS()).toBeNull();
+  });
+});
