@@ -1,0 +1,349 @@
+"""The vehicle's telemetry as one immutable snapshot, and the handlers that update it.
+
+Each handler is a pure function ``(msg, rx_monotonic) -> dict of changed fields``; the
+link applies the changes with :func:`dataclasses.replace` so readers always see a whole,
+consistent snapshot. Handlers raise on malformed messages and the link counts that,
+so one bad message can never stall the link.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, fields, is_dataclass
+from typing import Any, NamedTuple
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from backend.link.modes import mode_name
+from backend.link.state import LinkState
+
+#: How many recent STATUSTEXTs a snapshot keeps.
+STATUSTEXT_HISTORY = 50
+
+# SYS_STATUS bit that ArduPilot sets in onboard_control_sensors_health when the
+# pre-arm checks pass (MAV_SYS_STATUS_PREARM_CHECK).
+_PREARM_BIT = mavlink2.MAV_SYS_STATUS_PREARM_CHECK
+_UINT16_MAX = 65535
+
+# EKF_STATUS_REPORT flags (EKF_STATUS_FLAGS).
+_EKF_ATTITUDE = mavlink2.EKF_ATTITUDE
+_EKF_VEL_HORIZ = mavlink2.EKF_VELOCITY_HORIZ
+_EKF_POS_HORIZ_REL = mavlink2.EKF_POS_HORIZ_REL
+_EKF_POS_HORIZ_ABS = mavlink2.EKF_POS_HORIZ_ABS
+_EKF_POS_VERT_ABS = mavlink2.EKF_POS_VERT_ABS
+_EKF_CONST_POS_MODE = mavlink2.EKF_CONST_POS_MODE
+_EKF_UNINITIALIZED = mavlink2.EKF_UNINITIALIZED
+# ArduCopter's EKF failsafe threshold (FS_EKF_THRESH default): variances above it are bad.
+_EKF_VARIANCE_LIMIT = 0.8
+
+
+@dataclass(frozen=True)
+class Attitude:
+    """Euler angles (rad) and body rates (rad/s) from ATTITUDE."""
+
+    roll: float
+    pitch: float
+    yaw: float
+    rollspeed: float
+    pitchspeed: float
+    yawspeed: float
+
+
+@dataclass(frozen=True)
+class Vec3:
+    """A vector in the local NED frame (metres or metres per second)."""
+
+    x: float
+    y: float
+    z: float
+
+
+@dataclass(frozen=True)
+class GlobalPosition:
+    """WGS84 position from GLOBAL_POSITION_INT."""
+
+    lat_deg: float
+    lon_deg: float
+    alt_msl_m: float
+
+
+@dataclass(frozen=True)
+class GpsStatus:
+    """GPS_RAW_INT summary; ``None`` where the receiver reports 'unknown'."""
+
+    fix_type: int
+    satellites: int | None
+    hdop: float | None
+
+
+@dataclass(frozen=True)
+class EkfStatus:
+    """EKF_STATUS_REPORT summary.
+
+    ``healthy``: attitude, horizontal velocity, relative horizontal and absolute vertical
+    position are all valid, the filter is initialised and every variance is below 0.8
+    (ArduCopter's FS_EKF_THRESH). ``pos_horiz_ok``: an absolute horizontal position
+    estimate exists and the filter is not in constant-position mode (what GUIDED needs).
+    """
+
+    flags: int
+    healthy: bool
+    pos_horiz_ok: bool
+
+
+@dataclass(frozen=True)
+class Battery:
+    """Battery state; ``None`` where the vehicle reports 'unknown'."""
+
+    voltage_v: float | None
+    current_a: float | None
+    remaining_pct: int | None
+
+
+class StatusText(NamedTuple):
+    """One STATUSTEXT: UNIX receive time, MAV_SEVERITY, text."""
+
+    time: float
+    severity: int
+    text: str
+
+
+@dataclass(frozen=True)
+class Telemetry:
+    """One immutable snapshot of everything the link knows about the vehicle.
+
+    Fields are ``None`` until the vehicle has reported them. Time stamps: the
+    ``*_time_boot_ms`` fields are the vehicle's clock, the ``*_rx_monotonic`` fields
+    this process's :func:`time.monotonic` when the message arrived.
+    """
+
+    state: LinkState = LinkState.CONNECTING
+    vehicle_sysid: int | None = None
+    armed: bool = False
+    mode: str | None = None
+    mode_number: int | None = None
+    system_status: int | None = None
+    attitude: Attitude | None = None
+    position_ned: Vec3 | None = None
+    velocity_ned: Vec3 | None = None
+    relative_alt_m: float | None = None
+    global_position: GlobalPosition | None = None
+    heading_deg: float | None = None
+    gps: GpsStatus | None = None
+    ekf: EkfStatus | None = None
+    battery: Battery | None = None
+    rangefinder_m: float | None = None
+    prearm_ok: bool | None = None
+    statustexts: tuple[StatusText, ...] = ()
+    # link quality
+    msgs_per_s: float = 0.0
+    crc_errors: int = 0
+    heartbeat_age_s: float | None = None
+    packets_lost_pct: float = 0.0
+    handler_errors: int = 0
+    reconnects: int = 0
+    last_error: str | None = None
+    # time stamps of the pose messages, for latency-aware consumers
+    attitude_time_boot_ms: int | None = None
+    attitude_rx_monotonic: float | None = None
+    local_position_time_boot_ms: int | None = None
+    local_position_rx_monotonic: float | None = None
+    # what the GCS sent for precision landing (ArduPilot reports nothing back)
+    landing_targets_sent: int = 0
+    last_landing_target: dict[str, float] | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-serialisable form (non-finite floats become ``None``)."""
+        out: dict[str, Any] = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name == "statustexts":
+                out[f.name] = [
+                    {"time": s.time, "severity": s.severity, "text": s.text} for s in value
+                ]
+            else:
+                out[f.name] = _jsonable(value)
+        return out
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, LinkState):
+        return value.value
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if is_dataclass(value) and not isinstance(value, type):
+        return {f.name: _jsonable(getattr(value, f.name)) for f in fields(value)}
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_jsonable(v) for v in value]
+    return value
+
+
+# --------------------------------------------------------------------------- handlers
+
+
+def _on_heartbeat(msg: Any, now: float) -> dict[str, Any]:
+    custom = bool(msg.base_mode & mavlink2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED)
+    number = int(msg.custom_mode) if custom else None
+    return {
+        "armed": bool(msg.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED),
+        "mode_number": number,
+        "mode": mode_name(number),
+        "system_status": int(msg.system_status),
+        "vehicle_sysid": msg.get_srcSystem(),
+    }
+
+
+def _on_attitude(msg: Any, now: float) -> dict[str, Any]:
+    return {
+        "attitude": Attitude(
+            float(msg.roll),
+            float(msg.pitch),
+            float(msg.yaw),
+            float(msg.rollspeed),
+            float(msg.pitchspeed),
+            float(msg.yawspeed),
+        ),
+        "attitude_time_boot_ms": int(msg.time_boot_ms),
+        "attitude_rx_monotonic": now,
+    }
+
+
+def _on_local_position(msg: Any, now: float) -> dict[str, Any]:
+    return {
+        "position_ned": Vec3(float(msg.x), float(msg.y), float(msg.z)),
+        "velocity_ned": Vec3(float(msg.vx), float(msg.vy), float(msg.vz)),
+        "local_position_time_boot_ms": int(msg.time_boot_ms),
+        "local_position_rx_monotonic": now,
+    }
+
+
+def _on_global_position(msg: Any, now: float) -> dict[str, Any]:
+    changes: dict[str, Any] = {
+        "global_position": GlobalPosition(msg.lat * 1e-7, msg.lon * 1e-7, msg.alt * 1e-3),
+        "relative_alt_m": msg.relative_alt * 1e-3,
+    }
+    if msg.hdg != _UINT16_MAX:
+        changes["heading_deg"] = msg.hdg * 0.01
+    return changes
+
+
+def _on_vfr_hud(msg: Any, now: float) -> dict[str, Any]:
+    # GLOBAL_POSITION_INT.hdg is the primary source; VFR_HUD keeps the heading shown
+    # when only the extra streams are requested.
+    return {"heading_deg": float(msg.heading)}
+
+
+def _on_sys_status(msg: Any, now: float) -> dict[str, Any]:
+    present = bool(msg.onboard_control_sensors_present & _PREARM_BIT)
+    return {
+        "prearm_ok": bool(msg.onboard_control_sensors_health & _PREARM_BIT) if present else None,
+        "battery": Battery(
+            voltage_v=None if msg.voltage_battery == _UINT16_MAX else msg.voltage_battery * 1e-3,
+            current_a=None if msg.current_battery == -1 else msg.current_battery * 1e-2,
+            remaining_pct=None if msg.battery_remaining == -1 else int(msg.battery_remaining),
+        ),
+    }
+
+
+def _on_battery_status(msg: Any, now: float) -> dict[str, Any]:
+    if msg.id != 0:  # only the first battery is shown
+        return {}
+    cells = [v for v in msg.voltages if v != _UINT16_MAX]
+    return {
+        "battery": Battery(
+            voltage_v=sum(cells) * 1e-3 if cells else None,
+            current_a=None if msg.current_battery == -1 else msg.current_battery * 1e-2,
+            remaining_pct=None if msg.battery_remaining == -1 else int(msg.battery_remaining),
+        )
+    }
+
+
+def _on_gps_raw(msg: Any, now: float) -> dict[str, Any]:
+    return {
+        "gps": GpsStatus(
+            fix_type=int(msg.fix_type),
+            satellites=None if msg.satellites_visible == 255 else int(msg.satellites_visible),
+            hdop=None if msg.eph == _UINT16_MAX else msg.eph * 0.01,
+        )
+    }
+
+
+def _on_ekf_status(msg: Any, now: float) -> dict[str, Any]:
+    flags = int(msg.flags)
+    needed = _EKF_ATTITUDE | _EKF_VEL_HORIZ | _EKF_POS_HORIZ_REL | _EKF_POS_VERT_ABS
+    variances = (
+        msg.velocity_variance,
+        msg.pos_horiz_variance,
+        msg.pos_vert_variance,
+        msg.compass_variance,
+    )
+    healthy = (
+        flags & needed == needed
+        and not flags & _EKF_UNINITIALIZED
+        and all(math.isfinite(v) and v < _EKF_VARIANCE_LIMIT for v in variances)
+    )
+    pos_ok = bool(flags & _EKF_POS_HORIZ_ABS) and not flags & _EKF_CONST_POS_MODE
+    return {"ekf": EkfStatus(flags=flags, healthy=bool(healthy), pos_horiz_ok=pos_ok)}
+
+
+def _on_distance_sensor(msg: Any, now: float) -> dict[str, Any]:
+    if msg.orientation != mavlink2.MAV_SENSOR_ROTATION_PITCH_270:  # only the downward one
+        return {}
+    in_range = msg.min_distance <= msg.current_distance <= msg.max_distance
+    return {"rangefinder_m": msg.current_distance * 0.01 if in_range else None}
+
+
+def _on_rangefinder(msg: Any, now: float) -> dict[str, Any]:
+    return {"rangefinder_m": float(msg.distance)}
+
+
+Handler = Callable[[Any, float], dict[str, Any]]
+
+#: MAVLink message type -> handler updating the snapshot.
+TELEMETRY_HANDLERS: dict[str, Handler] = {
+    "HEARTBEAT": _on_heartbeat,
+    "ATTITUDE": _on_attitude,
+    "LOCAL_POSITION_NED": _on_local_position,
+    "GLOBAL_POSITION_INT": _on_global_position,
+    "VFR_HUD": _on_vfr_hud,
+    "SYS_STATUS": _on_sys_status,
+    "BATTERY_STATUS": _on_battery_status,
+    "GPS_RAW_INT": _on_gps_raw,
+    "EKF_STATUS_REPORT": _on_ekf_status,
+    "DISTANCE_SENSOR": _on_distance_sensor,
+    "RANGEFINDER": _on_rangefinder,
+}
+
+
+class StatusTextAssembler:
+    """Joins MAVLink 2 STATUSTEXT chunks (``id`` != 0) into whole texts.
+
+    A text longer than 50 characters arrives as chunks sharing an ``id``; the last
+    chunk is shorter than 50 characters. Single-message texts (``id`` == 0) pass
+    straight through. An unfinished text is given up when a new id starts.
+    """
+
+    _CHUNK = 50
+
+    def __init__(self) -> None:
+        self._parts: dict[tuple[int, int], list[str]] = {}
+
+    def feed(self, msg: Any) -> str | None:
+        """Return the complete text, or None while a chunked text is incomplete."""
+        text = str(msg.text)
+        chunk_id = int(getattr(msg, "id", 0) or 0)
+        if chunk_id == 0:
+            return text
+        key = (msg.get_srcSystem(), chunk_id)
+        # a different id from the same sender means the older one will never finish
+        for other in [k for k in self._parts if k[0] == key[0] and k != key]:
+            del self._parts[other]
+        parts = self._parts.setdefault(key, [])
+        parts.append(text)
+        if len(text) < self._CHUNK or len(parts) > 20:
+            del self._parts[key]
+            return "".join(parts)
+        return None
