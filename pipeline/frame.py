@@ -9,14 +9,21 @@ import cv2
 import numpy as np
 
 from pipeline.camera import Camera
-from pipeline.edgefit import fit_edges
+from pipeline.edgefit import edge_support, fit_edges
 from pipeline.edges import refine_polygon
 from pipeline.moments import hu_distance, shape_moments
-from pipeline.pose import ippe_candidates, pick_by_yaw, project, tilt_deg, to_pose
+from pipeline.pose import (
+    ippe_candidates,
+    pick_by_yaw,
+    pose_to_vectors,
+    project,
+    tilt_deg,
+    to_pose,
+)
 from pipeline.preprocess import METHODS, binarize, check_image, subsample
 from pipeline.reference import H_CORNERS, Reference
 from pipeline.result import FrameResult
-from pipeline.shapes import Region, polygon_corners, regions, upsampled_contour
+from pipeline.shapes import Region, douglas_peucker, polygon_corners, regions, upsampled_contour
 
 MIN_H_AREA_PX = 80.0  # smaller H's carry too few pixels for 12 corners
 MAX_HU_DISTANCE = 0.7  # log10 distance of Hu 1-2 (3-7 are noise for a symmetric H)
@@ -93,24 +100,28 @@ def process_frame(
 
     shapes = 0
     for region, hu in ranked:
-        poly = _corners(region, binary)
-        if poly is None:
-            clock.lap("corners")
-            continue
-        poly, residual = _match_corners(poly, reference.corners_m, region.area)
+        poly = None
+        for reading in _corner_hypotheses(region, binary):
+            ordered, residual = _match_corners(reading, reference.corners_m, region.area)
+            if residual <= MAX_SHAPE_RESIDUAL:
+                poly = ordered
+                break
         clock.lap("corners")
-        if residual > MAX_SHAPE_RESIDUAL:
+        if poly is None:
             continue
         shapes += 1
         refined = refine_polygon(binary.smooth, poly)
         corners = refined[0] if refined is not None else poly
         clock.lap("refine")
-        fit = _fit_pose(reference, binary.smooth, cam, corners)
+        fitted = _fit_pose(reference, binary.smooth, cam, corners)
         clock.lap("pose")
-        if fit is None:
+        if fitted is None:
             continue
+        fit, support = fitted
         pose = pick_by_yaw(to_pose(fit.rvec, fit.tvec, fit.rms_px, reference.symmetric), yaw_hint)
-        corners = project(reference.corners_m, fit.rvec, fit.tvec, cam)
+        # Corner i is where reference corner i lies under the reported pose
+        # (for a symmetric pad the twin pose numbers the corners 6 apart).
+        corners = project(reference.corners_m, *pose_to_vectors(pose), cam)
         mom = shape_moments(region.contour)
         timings["total"] = (time.perf_counter() - t_start) * 1e3
         back = 1.0 / scale
@@ -123,7 +134,7 @@ def process_frame(
             pose=pose,
             timings_ms=timings,
             contour_px=(region.contour.astype(np.float64) + 0.5) * back - 0.5,
-            score=float(fit.support),
+            score=support,
         )
     if not ranked:
         reason = "no H-like shape in view"
@@ -144,7 +155,8 @@ def _ranked(found: list[Region], reference: Reference) -> list[tuple[Region, tup
     for r in found:
         if abs(r.solidity - reference.solidity) > SOLIDITY_TOLERANCE:
             continue
-        hu = shape_moments(r.contour).hu
+        # OpenCV's moments here: the same numbers as pipeline.moments, faster.
+        hu = tuple(cv2.HuMoments(cv2.moments(r.contour.reshape(-1, 1, 2))).ravel())
         d = hu_distance(hu, reference.hu, count=2)
         if d <= MAX_HU_DISTANCE:
             out.append((d, r, hu))
@@ -152,16 +164,29 @@ def _ranked(found: list[Region], reference: Reference) -> list[tuple[Region, tup
     return [(r, hu) for _, r, hu in out]
 
 
-def _corners(region: Region, binary) -> np.ndarray | None:
-    """The 12 corners of a candidate; small ones are traced on a finer grid first."""
-    if region.area > FINE_TRACE_BELOW_PX:
-        return polygon_corners(region.contour, H_CORNERS)
-    fine = upsampled_contour(binary.smooth, binary.mask, region, FINE_FACTOR)
-    if fine is None:
-        return polygon_corners(region.contour, H_CORNERS)
-    pts, offset = fine
-    poly = polygon_corners(pts, H_CORNERS)
-    return None if poly is None else (poly + 0.5) / FINE_FACTOR - 0.5 + offset
+def _corner_hypotheses(region: Region, binary):
+    """Ways to read the 12 corners of a candidate, best first.
+
+    Curvature-scale-space corners on the boundary (traced on a 4x finer grid
+    for small candidates), then Douglas-Peucker polygons of the same boundary
+    and of the pixel boundary: blur can round a corner off or add a ripple
+    that CSS takes for one, and the cheaper readings are tried only then.
+    """
+    fine = None
+    if region.area <= FINE_TRACE_BELOW_PX:
+        fine = upsampled_contour(binary.smooth, binary.mask, region, FINE_FACTOR)
+    if fine is not None:
+        pts, offset = fine
+        for poly in (polygon_corners(pts, H_CORNERS), douglas_peucker(pts, H_CORNERS)):
+            if poly is not None:
+                yield (poly + 0.5) / FINE_FACTOR - 0.5 + offset
+    else:
+        poly = polygon_corners(region.contour, H_CORNERS)
+        if poly is not None:
+            yield poly
+    poly = douglas_peucker(region.contour, H_CORNERS)
+    if poly is not None:
+        yield poly
 
 
 def _match_corners(poly: np.ndarray, ref_m: np.ndarray, area: float) -> tuple[np.ndarray, float]:
@@ -188,23 +213,41 @@ def _match_corners(poly: np.ndarray, ref_m: np.ndarray, area: float) -> tuple[np
 
 
 def _fit_pose(reference: Reference, smooth: np.ndarray, cam: Camera, corners: np.ndarray):
-    """The pose that best explains the edges of the whole pad.
+    """The pose that best explains the edges of the whole pad, or None.
 
     IPPE on the H's corners gives two candidate poses (a small pad seen nearly
-    head-on can be tilted either way); each is refined on the edges of the H,
-    the side bars and the board outline (pipeline.edgefit), and the one whose
-    edges fit better wins. When the two fit equally well the one nearer to
-    looking straight down wins, as a hovering multirotor's camera does.
+    head-on can be tilted either way); each takes one step on the edges of the
+    H, the side bars and the board outline (pipeline.edgefit), and the one whose
+    edges fit better goes on to converge. When the two fit equally well both
+    go on, and if they still tie the one nearer to looking straight down wins,
+    as a hovering multirotor's camera does. The winner must find most of the
+    pad's edges where it puts them, or the H was a look-alike.
     """
-    best = None
+    model = reference.edge_model
+    img = smooth.astype(np.float32)
+    fits = []
     for rvec0, tvec0 in ippe_candidates(reference.corners_m, corners, cam):
-        fit = fit_edges(smooth, reference.edge_model, cam, rvec0, tvec0)
-        if fit is None or fit.support < MIN_EDGE_SUPPORT:
+        fit = fit_edges(img, model, cam, rvec0, tvec0, iterations=1)
+        if fit is not None:
+            fits.append(fit)
+    if not fits:
+        return None
+    fits.sort(key=lambda f: f.rms_px)
+    if len(fits) > 1 and fits[0].rms_px < AMBIGUOUS_FIT * fits[1].rms_px:
+        fits = fits[:1]
+    best = None
+    for start in fits:
+        fit = fit_edges(img, model, cam, start.rvec, start.tvec, iterations=2, search_px=1.5)
+        if fit is None:
             continue
         cand = (fit.rms_px, tilt_deg(fit.rvec), fit)
         if best is None or _better(cand, best):
             best = cand
-    return None if best is None else best[2]
+    if best is None:
+        return None
+    fit = best[2]
+    support = edge_support(img, model, cam, fit.rvec, fit.tvec)
+    return (fit, support) if support >= MIN_EDGE_SUPPORT else None
 
 
 def _better(a, b) -> bool:

@@ -60,22 +60,21 @@ def polygon_corners(contour: np.ndarray, count: int) -> np.ndarray | None:
     if len(idx) == count:
         out = pts[np.sort(idx)].astype(np.float64)
         return out if signed_area(out) > 0 else None
-    approx = _douglas_peucker(pts, count)
-    if approx is None:
-        return None
-    return approx if signed_area(approx) > 0 else None
+    return douglas_peucker(pts, count)
 
 
-def _douglas_peucker(pts: np.ndarray, count: int) -> np.ndarray | None:
-    """A polygon of exactly ``count`` vertices, by bisection on the tolerance."""
-    curve = pts.reshape(-1, 1, 2).astype(np.int32)
+def douglas_peucker(pts: np.ndarray, count: int) -> np.ndarray | None:
+    """A positively oriented polygon of exactly ``count`` vertices, by bisection on
+    the tolerance, or None."""
+    curve = np.asarray(pts).reshape(-1, 1, 2).astype(np.int32)
     length = cv2.arcLength(curve, True)
     lo, hi = 0.002 * length, 0.08 * length
     for _ in range(12):
         eps = 0.5 * (lo + hi)
         approx = cv2.approxPolyDP(curve, eps, True).reshape(-1, 2)
         if len(approx) == count:
-            return approx.astype(np.float64)
+            out = approx.astype(np.float64)
+            return out if signed_area(out) > 0 else None
         if len(approx) > count:
             lo = eps
         else:
@@ -109,9 +108,17 @@ def upsampled_contour(
     contours, _ = cv2.findContours(fine, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     if not contours:
         return None
+    # The region under a global threshold may be eroded or swollen by uneven
+    # light; the local threshold redraws it, so take the fine contour that
+    # holds the region's centre and is of a comparable size.
     want = region.area * factor * factor
-    best = min(contours, key=lambda c: abs(cv2.contourArea(c) - want))
-    if abs(cv2.contourArea(best) - want) > 0.35 * want:
+    cx, cy = (region.contour.mean(axis=0) - np.array([x0, y0]) + 0.5) * factor - 0.5
+    inside_centre = [
+        c for c in contours if cv2.pointPolygonTest(c, (float(cx), float(cy)), False) >= 0
+    ]
+    pool = inside_centre or contours
+    best = max(pool, key=cv2.contourArea)
+    if not 0.5 * want <= cv2.contourArea(best) <= 2.0 * want:
         return None
     return best.reshape(-1, 2)[::-1].copy(), np.array([x0, y0], np.float64)
 

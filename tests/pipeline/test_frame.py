@@ -81,13 +81,14 @@ def test_yaw_hint_picks_between_the_two_poses_of_a_symmetric_pad(reference, scen
     np.testing.assert_allclose(far.pose.position_m, [-0.2, -0.1, 2.0], atol=0.03)
 
 
-def test_corners_follow_the_reference_order(reference, scene):
+@pytest.mark.parametrize("yaw", [0.0, 25.0, 170.0, -100.0])
+def test_corners_follow_the_reference_order(reference, scene, yaw):
     from pipeline.render import project_points
 
-    R = camera_rotation(25.0)
+    R = camera_rotation(yaw)
     p = np.array([0.1, 0.0, 1.5])
     frame = render(scene, CAM, p, R)
-    res = process_frame(frame, reference, CAM, yaw_hint=25.0)
+    res = process_frame(frame, reference, CAM, yaw_hint=yaw)
     truth = project_points(CAM, p, R, np.column_stack([reference.corners_m, np.zeros(12)]))
     assert np.max(np.linalg.norm(res.corners_px - truth, axis=1)) < 0.5
 

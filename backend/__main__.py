@@ -1,0 +1,128 @@
+"""``python -m backend serve``: run the ground station.
+
+Every flag is also a ``VISLAND_*`` environment variable (a flag wins over the env).
+With no ``--mavlink`` the in-process ArduCopter stand-in flies; with no ``--camera``
+the simulated camera renders the pad from the vehicle's reported pose.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import socket
+import sys
+
+from pydantic import ValidationError
+
+from backend.settings import Settings, resolve_token
+
+# flag -> (settings field, type, help)
+_FLAGS: dict[str, tuple[str, type, str]] = {
+    "--host": ("host", str, "address to bind (default 127.0.0.1: this machine only)"),
+    "--port": ("port", int, "dashboard/API port (default 8000)"),
+    "--viser-port": ("viser_port", int, "3D view port (default 8080; 0 turns it off)"),
+    "--mavlink": (
+        "mavlink",
+        str,
+        "vehicle connection, e.g. tcp:127.0.0.1:5760, "
+        "udpin:0.0.0.0:14550, /dev/ttyUSB0,57600 (default: the stand-in)",
+    ),
+    "--camera": ("camera", str, "sim | cmucam4:PORT | opencv:SOURCE (default sim)"),
+    "--camera-calibration": ("camera_calibration", str, "OpenCV calibration file"),
+    "--reference": ("reference", str, "picture of the pad, cropped to its edge"),
+    "--pad-size": ("pad_size", float, "pad width in metres (default 0.55)"),
+    "--data-dir": ("data_dir", str, "where the database, token and flights live (./data)"),
+    "--token": ("token", str, "operator token (default: generated, kept in DATA_DIR/token)"),
+    "--sim-ready-after": ("sim_ready_after", float, "stand-in readiness time scale (1 = SITL)"),
+    "--sim-speedup": ("sim_speedup", float, "stand-in clock speed-up"),
+    "--pad-north": ("pad_north", float, "pad centre north of home, m"),
+    "--pad-east": ("pad_east", float, "pad centre east of home, m"),
+    "--pad-heading": ("pad_heading_deg", float, "where the pad picture's top faces, deg"),
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="python -m backend", description=__doc__.split("\n")[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+    serve = sub.add_parser("serve", help="run the ground station")
+    for flag, (field, kind, text) in _FLAGS.items():
+        serve.add_argument(flag, dest=field, type=kind, default=None, help=text)
+    serve.add_argument(
+        "--view-requires-token",
+        dest="view_requires_token",
+        action="store_true",
+        default=None,
+        help="viewing (GET, WebSocket) needs the token too",
+    )
+    serve.add_argument("--log-level", default="info", choices=["debug", "info", "warning"])
+    return parser
+
+
+def settings_from_args(args: argparse.Namespace) -> Settings:
+    """Settings from the environment, with the flags that were given on top."""
+    given = {
+        field: getattr(args, field)
+        for field, _, _ in [*_FLAGS.values(), ("view_requires_token", bool, "")]
+        if getattr(args, field, None) is not None
+    }
+    return Settings(**given)
+
+
+def port_is_free(host: str, port: int) -> bool:
+    """Whether a server could listen on ``host:port`` now (checked before starting)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            s.bind((host, port))
+        except OSError:
+            return False
+    return True
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        settings = settings_from_args(args)
+    except ValidationError as exc:
+        for err in exc.errors():
+            where = ".".join(str(p) for p in err["loc"])
+            print(f"error: {where}: {err['msg'].removeprefix('Value error, ')}", file=sys.stderr)
+        return 2
+
+    for flag, port in (("--port", settings.port), ("--viser-port", settings.viser_port)):
+        if port and not port_is_free(settings.host, port):
+            print(
+                f"error: {settings.host}:{port} is in use: choose another with {flag}",
+                file=sys.stderr,
+            )
+            return 2
+
+    import uvicorn
+
+    from backend.app import create_app
+    from backend.viewer3d import browsable_host
+
+    logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
+    token, token_path = resolve_token(settings)
+    settings = settings.model_copy(update={"token": token})
+    app = create_app(settings)
+    kept = f"kept in {token_path}" if token_path else "given on the command line/env"
+    lines = [
+        f"Visland ground station {'(stand-in vehicle)' if settings.mavlink is None else ''}",
+        f"  dashboard  http://{browsable_host(settings.host)}:{settings.port}",
+    ]
+    if settings.viser_port:
+        lines.append(f"  3D view    http://{browsable_host(settings.host)}:{settings.viser_port}")
+    lines += [f"  token      {token}  ({kept})", f"  data       {settings.data_dir}"]
+    if settings.host not in ("127.0.0.1", "localhost", "::1"):
+        lines.append(
+            f"  warning    listening on {settings.host}: reachable from the network; "
+            "commands still need the token"
+        )
+    print("\n".join(lines), flush=True)
+    uvicorn.run(app, host=settings.host, port=settings.port, log_level=args.log_level)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

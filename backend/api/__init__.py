@@ -1,0 +1,1 @@
+"""The HTTP and WebSocket API of the ground station (contract: see the dashboard's lib/)."""

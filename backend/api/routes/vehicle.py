@@ -1,0 +1,103 @@
+"""Vehicle commands: arm, disarm, force-disarm, land, rtl, takeoff, mode.
+
+Each answers the link's CommandResult: 200 accepted, 409 refused by the vehicle (its
+reasons verbatim), 503 link down, 504 no acknowledgement in time. Nothing is sent
+without the operator token.
+"""
+
+from __future__ import annotations
+
+import math
+
+from fastapi import APIRouter
+from fastapi.responses import JSONResponse
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+from backend.api.deps import Operator, StationDep
+from backend.link.commands import INVALID_ARGUMENT, LINK_DOWN, TIMEOUT
+from backend.link.modes import COPTER_MODES
+
+router = APIRouter(prefix="/vehicle", tags=["vehicle"], dependencies=[Operator])
+
+MAX_TAKEOFF_M = 100.0
+
+
+class Takeoff(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    altitude_m: float = Field(gt=0, le=MAX_TAKEOFF_M, description="metres above home")
+
+    @field_validator("altitude_m")
+    @classmethod
+    def _finite(cls, value: float) -> float:
+        if not math.isfinite(value):
+            raise ValueError("altitude_m must be a finite number")
+        return value
+
+
+class Mode(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    mode: str = Field(description="an ArduCopter mode name, e.g. GUIDED")
+
+    @field_validator("mode")
+    @classmethod
+    def _known(cls, value: str) -> str:
+        name = value.strip().upper()
+        if name not in COPTER_MODES.values():
+            raise ValueError(
+                f"unknown mode {value[:30]!r}; ArduCopter modes: "
+                + ", ".join(COPTER_MODES.values())
+            )
+        return name
+
+
+def _answer(result) -> JSONResponse:
+    body = result.to_dict()
+    if result.ok:
+        code = 200
+    elif result.result_name == LINK_DOWN:
+        code = 503
+    elif result.result_name == TIMEOUT:
+        code = 504
+    elif result.result_name == INVALID_ARGUMENT:
+        code = 422
+    else:
+        code = 409
+    if not result.ok:
+        # Errors carry a sentence in "detail" like every other error of the API.
+        body["detail"] = result.detail or f"{result.command} refused ({result.result_name})"
+    return JSONResponse(body, status_code=code)
+
+
+@router.post("/arm")
+def arm(station: StationDep) -> JSONResponse:
+    return _answer(station.command("arm"))
+
+
+@router.post("/disarm")
+def disarm(station: StationDep) -> JSONResponse:
+    return _answer(station.command("disarm"))
+
+
+@router.post("/force-disarm")
+def force_disarm(station: StationDep) -> JSONResponse:
+    return _answer(station.command("force-disarm"))
+
+
+@router.post("/land")
+def land(station: StationDep) -> JSONResponse:
+    return _answer(station.command("land"))
+
+
+@router.post("/rtl")
+def rtl(station: StationDep) -> JSONResponse:
+    return _answer(station.command("rtl"))
+
+
+@router.post("/takeoff")
+def takeoff(body: Takeoff, station: StationDep) -> JSONResponse:
+    return _answer(station.command("takeoff", body.altitude_m))
+
+
+@router.post("/mode")
+def set_mode(body: Mode, station: StationDep) -> JSONResponse:
+    return _answer(station.command("mode", body.mode))

@@ -1,0 +1,189 @@
+"""The FastAPI application: ``create_app(settings)`` builds it, the lifespan runs the station.
+
+Routes live under ``/api`` (one router per resource), the WebSocket at ``/ws``, the
+OpenAPI docs at ``/docs`` and the built dashboard (``frontend/dist``) at ``/``. Every
+error is ``{"detail": "<sentence>"}``; invalid input is a 422 with a sentence, never
+a 500.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from pathlib import Path
+
+import anyio
+from fastapi import FastAPI, Request, WebSocket
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import HTMLResponse, JSONResponse
+from fastapi.staticfiles import StaticFiles
+from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+from backend.api.routes import flights, health, reference, status, telemetry, vehicle
+from backend.api.routes import settings as settings_routes
+from backend.api.ws import Hub
+from backend.settings import Settings, get_settings
+from backend.station import VERSION, Station
+
+log = logging.getLogger(__name__)
+
+FRONTEND_DIST = Path(__file__).resolve().parent.parent / "frontend" / "dist"
+# Multipart framing around the file: what an upload may carry beyond the file itself.
+_MULTIPART_SLACK = 64 * 1024
+
+
+class UploadLimit:
+    """Refuse request bodies over the upload limit with 413, before they are stored.
+
+    Checks Content-Length up front and counts the bytes of chunked bodies as they come,
+    so a huge upload is cut off early instead of being spooled to disk first.
+    """
+
+    def __init__(self, app: ASGIApp, limit: int) -> None:
+        self.app, self.limit = app, limit + _MULTIPART_SLACK
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http" or scope["method"] not in ("POST", "PUT"):
+            await self.app(scope, receive, send)
+            return
+        for name, value in scope.get("headers", []):
+            if name == b"content-length":
+                try:
+                    too_big = int(value) > self.limit
+                except ValueError:
+                    too_big = False
+                if too_big:
+                    await self._refuse(send)
+                    return
+        seen = 0
+        started = False
+
+        async def counting_receive() -> Message:
+            nonlocal seen
+            message = await receive()
+            if message["type"] == "http.request":
+                seen += len(message.get("body", b""))
+                if seen > self.limit:
+                    raise _TooLarge(self.limit - _MULTIPART_SLACK)
+            return message
+
+        async def tracking_send(message: Message) -> None:
+            nonlocal started
+            started = started or message["type"] == "http.response.start"
+            await send(message)
+
+        try:
+            await self.app(scope, counting_receive, tracking_send)
+        except _TooLarge:
+            if not started:
+                await self._refuse(send)
+
+    async def _refuse(self, send: Send) -> None:
+        limit_mb = (self.limit - _MULTIPART_SLACK) / 1e6
+        response = JSONResponse(
+            {"detail": f"The upload is larger than the limit of {limit_mb:g} MB."},
+            status_code=413,
+        )
+        await response({"type": "http"}, _empty_receive, send)
+
+
+class _TooLarge(StarletteHTTPException):
+    """Raised from ``receive`` inside a route: FastAPI passes HTTPExceptions through."""
+
+    def __init__(self, limit: int) -> None:
+        super().__init__(413, f"The upload is larger than the limit of {limit / 1e6:g} MB.")
+
+
+async def _empty_receive() -> Message:
+    return {"type": "http.disconnect"}
+
+
+def _sentence(exc: RequestValidationError) -> str:
+    """One readable sentence from pydantic's list of errors."""
+    parts = []
+    for err in exc.errors():
+        kind = err.get("type", "")
+        loc = [str(p) for p in err.get("loc", ()) if p not in ("body", "query", "path", "header")]
+        where = ".".join(loc)
+        if kind == "json_invalid":
+            parts.append("The request body is not valid JSON")
+            continue
+        if kind == "missing" and not where:
+            parts.append("A JSON body is required")
+            continue
+        msg = str(err.get("msg", "is invalid")).removeprefix("Value error, ")
+        parts.append(f"{where}: {msg}" if where else msg)
+    text = "; ".join(dict.fromkeys(parts)) or "The request is invalid"
+    return f"Invalid input: {text}."
+
+
+def create_app(settings: Settings | None = None, *, station: Station | None = None) -> FastAPI:
+    """Build the app. The station starts with the app's lifespan and stops with it."""
+    settings = settings or get_settings()
+    station = station or Station(settings)
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        # Starting opens sockets and threads (a second or so): keep the loop free.
+        await anyio.to_thread.run_sync(station.start)
+        hub = Hub(station)
+        app.state.hub = hub
+        await hub.start()
+        try:
+            yield
+        finally:
+            await hub.stop()
+            await anyio.to_thread.run_sync(station.stop)
+
+    app = FastAPI(
+        title="Visland ground station",
+        version=VERSION,
+        description="Lands an ArduCopter on an 'H' helipad by machine vision.",
+        lifespan=lifespan,
+    )
+    app.state.station = station
+    app.state.settings = settings
+    app.add_middleware(UploadLimit, limit=settings.max_upload_bytes)
+
+    @app.exception_handler(RequestValidationError)
+    async def invalid_input(request: Request, exc: RequestValidationError) -> JSONResponse:
+        return JSONResponse({"detail": _sentence(exc)}, status_code=422)
+
+    @app.exception_handler(StarletteHTTPException)
+    async def http_error(request: Request, exc: StarletteHTTPException) -> JSONResponse:
+        detail = exc.detail if isinstance(exc.detail, str) else str(exc.detail)
+        return JSONResponse(
+            {"detail": detail}, status_code=exc.status_code, headers=getattr(exc, "headers", None)
+        )
+
+    @app.exception_handler(Exception)
+    async def unexpected(request: Request, exc: Exception) -> JSONResponse:
+        log.exception("unhandled error on %s %s", request.method, request.url.path)
+        return JSONResponse(
+            {"detail": f"Internal error ({type(exc).__name__}); see the server log."},
+            status_code=500,
+        )
+
+    for module in (health, status, telemetry, reference, vehicle, flights, settings_routes):
+        app.include_router(module.router, prefix="/api")
+
+    @app.websocket("/ws")
+    async def websocket(ws: WebSocket) -> None:
+        await app.state.hub.serve(ws)
+
+    if (FRONTEND_DIST / "index.html").is_file():
+        app.mount("/", StaticFiles(directory=FRONTEND_DIST, html=True), name="dashboard")
+    else:
+
+        @app.get("/", include_in_schema=False)
+        def no_dashboard() -> HTMLResponse:
+            return HTMLResponse(
+                "<!doctype html><title>Visland</title><h1>Visland ground station</h1>"
+                "<p>The dashboard is not built: run <code>cd frontend && npm ci && "
+                "npm run build</code>, then reload. The API is live: "
+                '<a href="/docs">/docs</a>.</p>'
+            )
+
+    return app

@@ -1,0 +1,137 @@
+"""The ground station's settings: one pydantic-settings class, env prefix ``VISLAND_``.
+
+Every field is also a CLI flag of ``python -m backend serve`` (see ``backend/__main__.py``).
+Tests override :func:`get_settings` (FastAPI dependency) or pass a ``Settings`` to
+``create_app``.
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+from functools import lru_cache
+from pathlib import Path
+
+from pydantic import Field, field_validator
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+DEFAULT_PAD_SIZE_M = 0.55
+MAX_PAD_SIZE_M = 20.0
+
+
+class Settings(BaseSettings):
+    """Start-up configuration of the ground station.
+
+    ``mavlink=None`` starts the in-process ArduCopter stand-in; ``camera="sim"`` renders
+    the pad from the vehicle's reported pose; ``reference=None`` uses the default pad
+    picture. ``viser_port=0`` turns the 3D view off (tests).
+    """
+
+    model_config = SettingsConfigDict(env_prefix="VISLAND_", extra="ignore")
+
+    host: str = "127.0.0.1"
+    port: int = Field(8000, ge=0, le=65535)
+    viser_port: int = Field(8080, ge=0, le=65535)
+    mavlink: str | None = None
+    camera: str = "sim"
+    camera_calibration: Path | None = None
+    camera_hfov_deg: float = Field(60.0, gt=0, lt=180)
+    reference: Path | None = None
+    pad_size: float = Field(DEFAULT_PAD_SIZE_M, gt=0, le=MAX_PAD_SIZE_M)
+    # Where the pad lies in the vehicle's local frame (metres from home) and where its
+    # picture's top edge faces (degrees clockwise from north): places the pad for the
+    # stand-in, the simulated camera and the 3D view, and resolves the H's 180 degree
+    # ambiguity from the vehicle's heading.
+    pad_north: float = Field(0.0, ge=-1000, le=1000)
+    pad_east: float = Field(0.0, ge=-1000, le=1000)
+    pad_heading_deg: float = Field(0.0, ge=-360, le=360)
+    data_dir: Path = Path("data")
+    token: str | None = None
+    view_requires_token: bool = False
+    record_frames: bool = True
+    jpeg_quality: int = Field(80, ge=10, le=100)
+    max_upload_bytes: int = Field(20 * 1024 * 1024, gt=0)
+    signing_key: str | None = None
+    # The in-process stand-in vehicle (used when mavlink is None).
+    sim_ready_after: float = Field(1.0, gt=0, le=10)
+    sim_speedup: float = Field(1.0, gt=0, le=50)
+    sim_seed: int = 0
+    link_timeout_s: float = Field(3.0, gt=0, le=60)
+    command_timeout_s: float = Field(3.0, gt=0, le=60)
+
+    @field_validator("mavlink", "token", "signing_key", mode="before")
+    @classmethod
+    def _blank_is_none(cls, value: object) -> object:
+        # An empty env var (VISLAND_MAVLINK=) means "not given", as on the CLI.
+        if isinstance(value, str) and not value.strip():
+            return None
+        return value
+
+    @field_validator("token")
+    @classmethod
+    def _token_long_enough(cls, value: str | None) -> str | None:
+        if value is not None and len(value) < 8:
+            raise ValueError("token must be at least 8 characters")
+        return value
+
+    @field_validator("camera")
+    @classmethod
+    def _camera_spec(cls, value: str) -> str:
+        kind, _, target = value.strip().partition(":")
+        kind = kind.lower()
+        if kind not in ("sim", "cmucam4", "opencv"):
+            raise ValueError("camera must be 'sim', 'cmucam4:PORT' or 'opencv:SOURCE'")
+        if kind == "sim" and target:
+            raise ValueError("camera 'sim' takes nothing after it")
+        if kind != "sim" and not target.strip():
+            raise ValueError(f"camera '{kind}:' needs a port, device, file or URL after the colon")
+        return value.strip()
+
+    @field_validator("reference", "camera_calibration")
+    @classmethod
+    def _existing_file(cls, value: Path | None) -> Path | None:
+        if value is not None and not Path(value).is_file():
+            raise ValueError(f"no file at {value}")
+        return value
+
+    @field_validator("signing_key")
+    @classmethod
+    def _signing_key_hex(cls, value: str | None) -> str | None:
+        if value is None:
+            return None
+        try:
+            key = bytes.fromhex(value)
+        except ValueError as exc:
+            raise ValueError("signing_key must be hex (64 digits for a 32-byte key)") from exc
+        if len(key) != 32:
+            raise ValueError("signing_key must be 32 bytes (64 hex digits)")
+        return value
+
+
+@lru_cache(maxsize=1)
+def get_settings() -> Settings:
+    """The process-wide settings from the environment (tests override this)."""
+    return Settings()
+
+
+def resolve_token(settings: Settings) -> tuple[str, Path | None]:
+    """The operator token and the file that keeps it.
+
+    A token given in the settings wins and is not written anywhere. Otherwise the token
+    lives in ``DATA_DIR/token`` (mode 0600), generated with :mod:`secrets` at first start.
+    """
+    if settings.token:
+        return settings.token, None
+    path = Path(settings.data_dir) / "token"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if path.is_file():
+        token = path.read_text().strip()
+        if len(token) >= 8:
+            return token, path
+    token = secrets.token_urlsafe(24)
+    # Create with 0600 from the start so the token is never world-readable, not even briefly.
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    with os.fdopen(fd, "w") as fh:
+        fh.write(token + "\n")
+    os.chmod(path, 0o600)
+    return token, path

@@ -1,0 +1,236 @@
+"""The 3D view (viser) behind one adapter: pad, vehicle, camera frustum, vision pose, trail.
+
+World frame: ENU about the vehicle's local origin (x east, y north, z up), so the
+scene reads like a map. Scene paths:
+
+- ``/pad``: the reference picture laid flat at the pad's place and heading
+- ``/vehicle``: the vehicle's body frame (FRD axes) from telemetry
+- ``/vehicle/camera``: the camera frustum (looking down, image top = forward)
+- ``/vision``: the camera pose the pipeline measured, placed via the pad (compare it
+  with ``/vehicle/camera``: they coincide when vision and telemetry agree)
+- ``/trail``: the vehicle's recent positions
+
+Handles are created once and their properties assigned; each update is one atomic
+batch. The dashboard embeds the viser page in an iframe.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+from collections import deque
+
+import numpy as np
+
+log = logging.getLogger(__name__)
+
+# ENU from NED: swap north/east, flip down.
+_ENU_FROM_NED = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+_IMAGE_FLIP = np.diag([1.0, -1.0, -1.0])
+# The camera in the body (FRD) frame: optical axis down, image x right, image y backward.
+R_BODY_CAM = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+
+
+def rotation_ned_body(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """Body FRD -> NED rotation from MAVLink ATTITUDE angles (ZYX: yaw, pitch, roll)."""
+    cr, sr = math.cos(roll), math.sin(roll)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
+
+
+def rotation_world_pad(heading_deg: float) -> np.ndarray:
+    """Pad frame -> world (ENU) for a pad whose picture top faces ``heading_deg``.
+
+    The heading is clockwise from north. Pad +y (picture top) points along the heading,
+    pad +x (picture right) 90 degrees clockwise from it, pad +z up.
+    """
+    psi = math.radians(heading_deg)
+    x_axis = [math.cos(psi), -math.sin(psi), 0.0]
+    y_axis = [math.sin(psi), math.cos(psi), 0.0]
+    return np.column_stack([x_axis, y_axis, [0.0, 0.0, 1.0]])
+
+
+def browsable_host(host: str) -> str:
+    """The address a local browser should use for a server bound to ``host``."""
+    return "127.0.0.1" if host in ("0.0.0.0", "::", "") else host
+
+
+def _wxyz(R: np.ndarray) -> np.ndarray:
+    import viser.transforms as tf
+
+    return np.asarray(tf.SO3.from_matrix(np.asarray(R, float)).wxyz)
+
+
+class Viewer3D:
+    """A viser server on ``host:port`` showing the landing scene.
+
+    Parameters
+    ----------
+    pad_image_bgr : the reference picture (shown as the pad's texture).
+    pad_size_m : the pad's width.
+    pad_ned : (north, east) of the pad centre in the local frame.
+    pad_heading_deg : where the pad picture's top faces (clockwise from north).
+    """
+
+    def __init__(
+        self,
+        host: str,
+        port: int,
+        *,
+        pad_image_bgr: np.ndarray,
+        pad_size_m: float,
+        pad_ned: tuple[float, float] = (0.0, 0.0),
+        pad_heading_deg: float = 0.0,
+        camera_hfov_deg: float = 60.0,
+        aspect: float = 4 / 3,
+        trail_points: int = 600,
+    ) -> None:
+        self.host, self.port = host, int(port)
+        self._pad_image = pad_image_bgr
+        self._pad_size = float(pad_size_m)
+        self._pad_ned = (float(pad_ned[0]), float(pad_ned[1]))
+        self._pad_heading = float(pad_heading_deg)
+        self._hfov = math.radians(camera_hfov_deg)
+        self._aspect = float(aspect)
+        self._trail: deque[np.ndarray] = deque(maxlen=trail_points)
+        self._lock = threading.Lock()
+        self._server = None
+        self._h: dict = {}
+
+    @property
+    def url(self) -> str:
+        """Where a browser on this machine finds the view (a wildcard bind means loopback)."""
+        return f"http://{browsable_host(self.host)}:{self.port}"
+
+    @property
+    def R_world_pad(self) -> np.ndarray:
+        return rotation_world_pad(self._pad_heading)
+
+    @property
+    def pad_origin_world(self) -> np.ndarray:
+        return np.array([self._pad_ned[1], self._pad_ned[0], 0.0])
+
+    def start(self) -> None:
+        import viser
+
+        with self._lock:
+            if self._server is not None:
+                return
+            server = viser.ViserServer(host=self.host, port=self.port, verbose=False)
+            self._server = server
+            scene = server.scene
+            scene.set_up_direction("+z")
+            # Start looking at the pad from the south-west, a few metres up.
+            eye = self.pad_origin_world + np.array([-3.0, -5.0, 4.0])
+            server.initial_camera.position = tuple(eye)
+            server.initial_camera.look_at = tuple(self.pad_origin_world)
+            server.initial_camera.up = (0.0, 0.0, 1.0)
+            scene.add_grid("/ground", width=20.0, height=20.0, cell_size=1.0, section_size=5.0)
+            self._h["pad"] = self._add_pad()
+            self._h["vehicle"] = scene.add_frame(
+                "/vehicle", axes_length=0.4, axes_radius=0.02, visible=False
+            )
+            vfov = 2 * math.atan(math.tan(self._hfov / 2) / self._aspect)
+            self._h["camera"] = scene.add_camera_frustum(
+                "/vehicle/camera",
+                fov=vfov,
+                aspect=self._aspect,
+                scale=0.3,
+                color=(40, 120, 255),
+                wxyz=_wxyz(R_BODY_CAM),
+            )
+            self._h["vision"] = scene.add_frame(
+                "/vision", axes_length=0.25, axes_radius=0.015, visible=False
+            )
+            self._h["vision_frustum"] = scene.add_camera_frustum(
+                "/vision/frustum", fov=vfov, aspect=self._aspect, scale=0.3, color=(255, 140, 0)
+            )
+            self._h["trail"] = scene.add_point_cloud(
+                "/trail",
+                np.zeros((1, 3), np.float32),
+                colors=np.array([[80, 200, 255]], np.uint8),
+                point_size=0.05,
+                visible=False,
+            )
+
+    def _add_pad(self):
+        image = self._pad_image[:, :, ::-1]  # viser wants RGB
+        h, w = image.shape[:2]
+        return self._server.scene.add_image(
+            "/pad",
+            np.ascontiguousarray(image),
+            render_width=self._pad_size,
+            render_height=self._pad_size * h / w,
+            # viser lays images out like OpenCV (rows along local +y, seen from -z):
+            # turn it over about x so the picture's top faces pad +y, seen from above.
+            wxyz=_wxyz(self.R_world_pad @ _IMAGE_FLIP),
+            position=self.pad_origin_world + np.array([0.0, 0.0, 0.002]),
+        )
+
+    def set_pad(self, image_bgr: np.ndarray, size_m: float) -> None:
+        """Show a new reference picture as the pad's texture."""
+        with self._lock:
+            self._pad_image, self._pad_size = image_bgr, float(size_m)
+            if self._server is None:
+                return
+            self._h["pad"].remove()
+            self._h["pad"] = self._add_pad()
+
+    def update(
+        self,
+        *,
+        position_ned: tuple[float, float, float] | None,
+        attitude_rpy: tuple[float, float, float] | None,
+        vision_position_m: np.ndarray | None = None,
+        vision_R_pad_cam: np.ndarray | None = None,
+    ) -> None:
+        """Move the vehicle (telemetry) and the vision camera pose; one atomic batch."""
+        with self._lock:
+            server = self._server
+            if server is None:
+                return
+            with server.atomic():
+                vehicle = self._h["vehicle"]
+                if position_ned is not None and attitude_rpy is not None:
+                    p = _ENU_FROM_NED @ np.asarray(position_ned, float)
+                    vehicle.position = p
+                    vehicle.wxyz = _wxyz(_ENU_FROM_NED @ rotation_ned_body(*attitude_rpy))
+                    vehicle.visible = True
+                    if not self._trail or np.linalg.norm(self._trail[-1] - p) > 0.05:
+                        self._trail.append(p)
+                        trail = self._h["trail"]
+                        trail.points = np.asarray(self._trail, np.float32)
+                        trail.colors = np.tile(
+                            np.array([[80, 200, 255]], np.uint8), (len(self._trail), 1)
+                        )
+                        trail.visible = True
+                else:
+                    vehicle.visible = False
+                vision = self._h["vision"]
+                if vision_position_m is not None and vision_R_pad_cam is not None:
+                    R_wp = self.R_world_pad
+                    vision.position = self.pad_origin_world + R_wp @ np.asarray(
+                        vision_position_m, float
+                    )
+                    vision.wxyz = _wxyz(R_wp @ np.asarray(vision_R_pad_cam, float))
+                    vision.visible = True
+                else:
+                    vision.visible = False
+
+    def close(self) -> None:
+        with self._lock:
+            server, self._server = self._server, None
+            self._h.clear()
+        if server is not None:
+            try:
+                server.stop()
+            except Exception:
+                log.exception("viser did not stop cleanly")

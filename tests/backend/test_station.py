@@ -1,0 +1,155 @@
+"""The station as a whole: starts, runs, stops cleanly; bad start-up input is refused."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import cv2
+import numpy as np
+import pytest
+
+from backend.settings import Settings
+from backend.station import NoUsableH, Station, UnsupportedImage, decode_image, sniff_image
+from pipeline.render import make_pad_image
+
+
+def settings(tmp_path, **kw) -> Settings:
+    base = {
+        "data_dir": tmp_path,
+        "token": "station-test-token",
+        "viser_port": 0,
+        "sim_ready_after": 0.1,
+        "link_timeout_s": 1.0,
+    }
+    base.update(kw)
+    return Settings(**base)
+
+
+def wait_for(predicate, timeout):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return True
+        time.sleep(0.05)
+    raise AssertionError("condition not met in time")
+
+
+def test_start_run_stop_leaves_no_threads(tmp_path):
+    before = {t.ident for t in threading.enumerate()}
+    station = Station(settings(tmp_path))
+    station.start()
+    try:
+        wait_for(lambda: station.link.telemetry.state == "up", 15)
+        wait_for(lambda: station.worker.stats.processed >= 2, 20)
+        status = station.status()
+        assert status["link"]["state"] == "up" and status["camera"]["state"] == "streaming"
+        assert status["reference"]["name"] == "default pad"
+        assert (tmp_path / "visland.db").is_file()
+    finally:
+        station.stop()
+    station.stop()  # idempotent
+    time.sleep(0.3)
+    left = [t for t in threading.enumerate() if t.ident not in before and t.is_alive()]
+    assert not left, [t.name for t in left]
+
+
+def test_an_unreachable_vehicle_shows_and_commands_fail_at_once(tmp_path):
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]  # closed again: nothing listens there
+    station = Station(settings(tmp_path, mavlink=f"tcp:127.0.0.1:{port}"))
+    station.start()
+    try:
+        assert station.vehicle_server is None
+        assert station.status()["link"]["state"] in ("connecting", "lost")
+        t0 = time.monotonic()
+        result = station.command("arm")
+        assert not result.ok and result.result_name == "LINK_DOWN"
+        assert time.monotonic() - t0 < 1.0
+        assert station.status()["camera"]["frames"] == 0  # no pose, no simulated picture
+    finally:
+        station.stop()
+
+
+def test_a_reference_given_at_start_is_used(tmp_path):
+    path = tmp_path / "my pad.png"
+    cv2.imwrite(str(path), make_pad_image(500))
+    station = Station(settings(tmp_path / "data", reference=path, pad_size=0.9))
+    station.start()
+    try:
+        summary = station.reference_summary()
+        assert summary["name"] == "my pad.png" and summary["pad_size_m"] == 0.9
+    finally:
+        station.stop()
+
+
+def test_a_reference_without_h_at_start_is_a_clear_error(tmp_path):
+    path = tmp_path / "blank.png"
+    cv2.imwrite(str(path), np.zeros((200, 200, 3), np.uint8))
+    station = Station(settings(tmp_path / "data", reference=path))
+    with pytest.raises(NoUsableH, match=r"white shape|H"):
+        station.start()
+    assert station.link is None and station.storage is None  # all taken down again
+
+
+def test_token_file_is_made_when_no_token_is_given(tmp_path):
+    station = Station(settings(tmp_path, token=None, mavlink="tcp:127.0.0.1:9"))
+    station.start()
+    try:
+        assert (tmp_path / "token").read_text().strip() == station.token
+        assert station.token_path == tmp_path / "token"
+    finally:
+        station.stop()
+
+
+@pytest.mark.parametrize(
+    ("data", "kind"),
+    [
+        (b"\x89PNG\r\n\x1a\nxx", "png"),
+        (b"\xff\xd8\xff\xe0", "jpeg"),
+        (b"BMxxxx", "bmp"),
+        (b"RIFF\x00\x00\x00\x00WEBPVP8 ", "webp"),
+        (b"II*\x00", "tiff"),
+        (b"GIF89a", None),
+        (b"", None),
+    ],
+)
+def test_sniff(data, kind):
+    assert sniff_image(data) == kind
+
+
+def test_decode_refuses_non_pictures():
+    with pytest.raises(UnsupportedImage, match="not a picture"):
+        decode_image(b"plain text")
+    with pytest.raises(UnsupportedImage, match="cannot be decoded"):
+        decode_image(b"\x89PNG\r\n\x1a\n" + b"\x00" * 64)
+    _ok, buf = cv2.imencode(".jpg", make_pad_image(100))
+    assert decode_image(buf.tobytes()).shape == (100, 100, 3)
+
+
+def test_an_opencv_video_file_feeds_the_pipeline(tmp_path):
+    from pipeline.camera import Camera
+    from pipeline.render import camera_rotation, make_scene, render
+
+    cam = Camera.from_fov(640, 480, 60)
+    scene = make_scene(make_pad_image(800), 0.55, rng=np.random.default_rng(4))
+    path = tmp_path / "flight.avi"
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 20, (640, 480))
+    for i in range(30):
+        writer.write(render(scene, cam, np.array([0.01 * i, 0.0, 2.5]), camera_rotation(10.0)))
+    writer.release()
+    station = Station(
+        settings(tmp_path / "data", camera=f"opencv:{path}", mavlink="tcp:127.0.0.1:9")
+    )
+    station.start()
+    try:
+        wait_for(lambda: station.worker.stats.processed >= 5, 20)
+        latest = station.worker.latest
+        assert latest.result.detected and latest.result.pose is not None
+        assert abs(latest.result.pose.altitude_m - 2.5) < 0.1
+        assert station.status()["camera"]["name"]
+    finally:
+        station.stop()

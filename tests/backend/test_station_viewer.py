@@ -1,0 +1,116 @@
+"""The 3D view adapter: its frames agree with the simulated camera's, and viser serves it."""
+
+from __future__ import annotations
+
+import math
+import socket
+
+import httpx
+import numpy as np
+import pytest
+import viser.transforms as tf
+
+from backend.camera.sim_source import (
+    SimCameraConfig,
+    VehiclePose,
+    camera_pose_in_pad_frame,
+    rot_ned_body,
+    rot_ned_pad,
+)
+from backend.station import camera_yaw_in_pad
+from backend.viewer3d import (
+    _ENU_FROM_NED,
+    R_BODY_CAM,
+    Viewer3D,
+    rotation_ned_body,
+    rotation_world_pad,
+)
+from pipeline.render import make_pad_image
+from pipeline.result import yaw_of
+
+
+@pytest.mark.parametrize("heading", [0.0, 37.0, -120.0, 180.0])
+def test_pad_placement_matches_the_simulated_camera(heading):
+    assert np.allclose(_ENU_FROM_NED @ rot_ned_pad(heading), rotation_world_pad(heading))
+
+
+@pytest.mark.parametrize("rpy", [(0, 0, 0), (0.1, -0.2, 2.5), (-0.3, 0.05, -1.0)])
+def test_attitude_matches_the_simulated_camera(rpy):
+    assert np.allclose(rotation_ned_body(*rpy), rot_ned_body(*rpy))
+
+
+def test_camera_mount_matches_the_simulated_camera():
+    assert np.allclose(R_BODY_CAM, SimCameraConfig().mount_rotation)
+
+
+@pytest.mark.parametrize(("pad", "yaw_deg"), [(0, 0), (0, 45), (30, 170), (-120, -60)])
+def test_yaw_hint_is_the_yaw_the_camera_really_has(pad, yaw_deg):
+    pose = VehiclePose((1.0, 2.0, -3.0), 0.0, 0.0, math.radians(yaw_deg), 0.0)
+    _, R_pad_cam = camera_pose_in_pad_frame(pose, SimCameraConfig(pad_heading_deg=pad))
+    got = camera_yaw_in_pad(pad, math.radians(yaw_deg))
+    assert abs((got - yaw_of(R_pad_cam) + 180) % 360 - 180) < 1e-9
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_viser_serves_the_scene_and_takes_updates():
+    port = _free_port()
+    viewer = Viewer3D(
+        "127.0.0.1",
+        port,
+        pad_image_bgr=make_pad_image(256),
+        pad_size_m=0.55,
+        pad_ned=(1.0, -2.0),
+        pad_heading_deg=30.0,
+    )
+    viewer.start()
+    try:
+        assert viewer.url == f"http://127.0.0.1:{port}"
+        page = httpx.get(viewer.url, timeout=5)
+        assert page.status_code == 200 and "<html" in page.text.lower()
+        for i in range(5):
+            viewer.update(
+                position_ned=(0.1 * i, 0.0, -2.0),
+                attitude_rpy=(0.0, 0.0, 0.3),
+                vision_position_m=np.array([0.0, 0.0, 2.0]),
+                vision_R_pad_cam=np.diag([1.0, -1.0, -1.0]),
+            )
+        viewer.update(position_ned=None, attitude_rpy=None)
+        viewer.set_pad(make_pad_image(128), 1.0)
+        assert len(viewer._trail) == 5
+        # The picture's top edge (image rows run along local +y) faces the pad's heading.
+        R_pad_img = tf.SO3(np.asarray(viewer._h["pad"].wxyz)).as_matrix()
+        top = R_pad_img @ np.array([0.0, -1.0, 0.0])
+        right = R_pad_img @ np.array([1.0, 0.0, 0.0])
+        psi = math.radians(30.0)
+        assert np.allclose(top, [math.sin(psi), math.cos(psi), 0.0])
+        assert np.allclose(right, [math.cos(psi), -math.sin(psi), 0.0])
+        # The vision frame sits over the pad: pad origin + 2 m up.
+        assert np.allclose(viewer._h["vision"].position, [-2.0, 1.0, 2.0])
+    finally:
+        viewer.close()
+    viewer.close()  # idempotent
+    with socket.socket() as s:  # nothing listens on the port any more
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        s.bind(("127.0.0.1", port))
+
+
+@pytest.mark.parametrize(
+    ("host", "shown"),
+    [
+        ("0.0.0.0", "127.0.0.1"),
+        ("::", "127.0.0.1"),
+        ("127.0.0.1", "127.0.0.1"),
+        ("192.168.1.5", "192.168.1.5"),
+    ],
+)
+def test_urls_name_an_address_a_browser_can_open(host, shown):
+    from backend.viewer3d import browsable_host
+
+    assert browsable_host(host) == shown
+    viewer = Viewer3D(host, 8080, pad_image_bgr=make_pad_image(64), pad_size_m=0.55)
+    assert viewer.url == f"http://{shown}:8080"

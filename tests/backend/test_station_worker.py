@@ -1,0 +1,139 @@
+"""The vision worker: own thread, newest frame first, drops counted, sinks isolated."""
+
+from __future__ import annotations
+
+import itertools
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from backend.camera import ThreadedSource
+from backend.vision_worker import VisionWorker
+from pipeline import Camera, Reference, process_frame
+from pipeline.render import camera_rotation, make_pad_image, make_scene, render
+
+CAMERA = Camera.from_fov(640, 480, 60)
+
+
+class RenderedSource(ThreadedSource):
+    """A real source (the camera package's capture thread) serving a rendered view."""
+
+    def __init__(self, image: np.ndarray, rate_hz: float) -> None:
+        super().__init__("rendered")
+        self.expected_period = 1.0 / rate_hz
+        self._image = image
+        self._next = 0.0
+
+    def _open(self) -> None:
+        self._next = time.monotonic()
+
+    def _grab(self):
+        now = time.monotonic()
+        if now < self._next and self._sleep(self._next - now):
+            return None
+        self._next += self.expected_period
+        return self._image, time.monotonic(), {}
+
+    def _release(self) -> None:
+        pass
+
+
+@pytest.fixture(scope="module")
+def pad_frame():
+    pad = make_pad_image(800)
+    scene = make_scene(pad, 0.55, rng=np.random.default_rng(1))
+    frame = render(scene, CAMERA, np.array([0.05, -0.1, 2.5]), camera_rotation(20.0))
+    return Reference.from_image(pad, 0.55), frame
+
+
+def run_worker(source, reference, seconds, **kw):
+    worker = VisionWorker(
+        source, reference=lambda: reference, camera=CAMERA, process=process_frame, **kw
+    )
+    got = []
+    worker.add_sink(got.append)
+    source.start()
+    worker.start()
+    try:
+        time.sleep(seconds)
+    finally:
+        worker.close()
+        source.close()
+    return worker, got
+
+
+def test_processes_frames_and_finds_the_pad(pad_frame):
+    reference, frame = pad_frame
+    worker, got = run_worker(RenderedSource(frame, 10), reference, 1.0, yaw_hint=lambda: 20.0)
+    assert len(got) >= 3
+    assert all(p.result.detected for p in got)
+    assert got[-1].result.pose is not None
+    assert np.allclose(got[-1].result.pose.position_m, [0.05, -0.1, 2.5], atol=0.1)
+    stats = worker.stats
+    assert stats.processed == len(got) and stats.detected_rate == 1.0
+    assert stats.latency_ms is not None and stats.latency_ms > 0
+    assert all(p.latency_ms >= 0 for p in got)
+
+
+def test_a_fast_camera_drops_frames_and_counts_them(pad_frame):
+    reference, frame = pad_frame
+    source = RenderedSource(frame, 400)  # far faster than the pipeline
+    worker, got = run_worker(source, reference, 1.0)
+    stats = worker.stats
+    seqs = [p.frame.seq for p in got]
+    assert seqs == sorted(seqs)
+    gaps = sum(b - a - 1 for a, b in itertools.pairwise(seqs))
+    assert stats.dropped == gaps > 0  # every skipped frame counted, none twice
+
+
+def test_a_raising_sink_is_counted_and_the_others_still_get_results(pad_frame):
+    reference, frame = pad_frame
+    source = RenderedSource(frame, 20)
+    worker = VisionWorker(source, reference=lambda: reference, camera=CAMERA, process=process_frame)
+
+    def broken(_):
+        raise RuntimeError("sink bug")
+
+    got = []
+    worker.add_sink(broken)
+    remove = worker.add_sink(got.append)
+    source.start()
+    worker.start()
+    try:
+        deadline = time.monotonic() + 5
+        while len(got) < 3 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        remove()
+        n = len(got)
+        time.sleep(0.3)
+    finally:
+        worker.close()
+        source.close()
+    assert n >= 3 and len(got) == n  # removed sinks get nothing more
+    assert worker.stats.errors >= 3 and "sink bug" in worker.stats.last_error
+
+
+def test_no_reference_means_no_processing(pad_frame):
+    _, frame = pad_frame
+    worker, got = run_worker(RenderedSource(frame, 50), None, 0.3)
+    assert got == [] and worker.stats.processed == 0
+
+
+def test_frames_of_another_size_use_the_scaled_camera(pad_frame):
+    reference, frame = pad_frame
+    import cv2
+
+    small = cv2.resize(frame, (320, 240), interpolation=cv2.INTER_AREA)
+    _, got = run_worker(RenderedSource(small, 10), reference, 0.8, yaw_hint=lambda: 20.0)
+    assert got and got[-1].camera.width == 320 and got[-1].result.detected
+
+
+def test_close_joins_the_thread(pad_frame):
+    reference, frame = pad_frame
+    before = threading.active_count()
+    worker, _ = run_worker(RenderedSource(frame, 30), reference, 0.2)
+    worker.close()  # idempotent
+    time.sleep(0.1)
+    assert threading.active_count() <= before

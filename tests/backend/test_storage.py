@@ -1,0 +1,103 @@
+"""Storage: the schema, each table, and that nothing is lost across a reopen."""
+
+from __future__ import annotations
+
+import sqlite3
+import threading
+
+import pytest
+
+from backend.storage import SCHEMA_VERSION, Storage
+
+
+@pytest.fixture
+def db(tmp_path):
+    store = Storage(tmp_path / "v.db")
+    yield store
+    store.close()
+
+
+def test_schema_is_versioned_and_created(db):
+    assert db.schema_version == SCHEMA_VERSION
+    names = {
+        r[0]
+        for r in sqlite3.connect(db.path).execute(
+            "SELECT name FROM sqlite_master WHERE type='table'"
+        )
+    }
+    assert {"refs", "flights", "mission_runs", "events", "settings", "schema_version"} <= names
+
+
+def test_references_activate_exactly_one(db):
+    a = db.add_reference("a", 0.55, "/x/a", {"hu": [1.0]})
+    b = db.add_reference("b", 1.0, "/x/b", {"hu": [2.0]})
+    assert db.active_reference() is None
+    db.activate_reference(a)
+    assert db.active_reference()["id"] == a
+    db.activate_reference(b)
+    assert db.active_reference()["id"] == b
+    assert [r["active"] for r in db.list_references()] == [True, False]  # newest first
+    assert db.get_reference(a)["data"] == {"hu": [1.0]}
+
+
+def test_activating_unknown_reference_keeps_the_active_one(db):
+    a = db.add_reference("a", 0.55, "/x/a", {})
+    db.activate_reference(a)
+    with pytest.raises(KeyError):
+        db.activate_reference(999)
+    assert db.active_reference()["id"] == a
+
+
+def test_everything_survives_reopen(tmp_path):
+    path = tmp_path / "v.db"
+    store = Storage(path)
+    ref = store.add_reference("pad", 0.55, "/refs/1", {"k": 1})
+    store.activate_reference(ref)
+    done = store.start_flight("/f/1", "armed")
+    store.end_flight(done, frames=12, end_reason="disarmed")
+    open_flight = store.start_flight("/f/2", "armed")
+    run = store.start_mission_run("land", {"alt": 3})
+    store.end_mission_run(run, "landed", {"error_m": 0.04})
+    store.add_event("link_up", "link up", {"url": "tcp:x"})
+    store.put_settings({"record_frames": False, "jpeg_quality": 70})
+    store.close()
+
+    again = Storage(path)
+    try:
+        assert again.active_reference()["id"] == ref
+        flights = {f["id"]: f for f in again.list_flights()}
+        assert flights[done]["frames"] == 12 and flights[done]["end_reason"] == "disarmed"
+        # A flight left open by a crash is closed as interrupted, not left dangling.
+        assert flights[open_flight]["ended"] is not None
+        assert flights[open_flight]["end_reason"] == "interrupted"
+        runs = again.list_mission_runs()
+        assert runs[0]["outcome"] == "landed" and runs[0]["detail"] == {"error_m": 0.04}
+        events = again.recent_events()
+        assert events[-1]["kind"] == "link_up" and events[-1]["data"] == {"url": "tcp:x"}
+        assert again.get_settings() == {"record_frames": False, "jpeg_quality": 70}
+    finally:
+        again.close()
+
+
+def test_newer_schema_is_refused_with_a_sentence(tmp_path):
+    path = tmp_path / "v.db"
+    Storage(path).close()
+    con = sqlite3.connect(path)
+    con.execute("UPDATE schema_version SET version = ?", (SCHEMA_VERSION + 1,))
+    con.commit()
+    con.close()
+    with pytest.raises(RuntimeError, match="newer than this program"):
+        Storage(path)
+
+
+def test_concurrent_writers_lose_nothing(db):
+    def write(n):
+        for i in range(50):
+            db.add_event("statustext", f"{n}-{i}")
+
+    threads = [threading.Thread(target=write, args=(n,)) for n in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(10)
+    assert len(db.recent_events(limit=1000)) == 200
