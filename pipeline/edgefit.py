@@ -58,7 +58,6 @@ class EdgeFit:
     rms_px: float  # RMS distance of the inlier edge points to the model edges
     inliers: int
     sides: int  # model sides that contributed
-    support: float  # share of the pad's edge samples found where this pose puts them
 
 
 def fit_edges(
@@ -118,17 +117,16 @@ def fit_edges(
         result = (rvec.copy(), tvec.copy(), rms, len(r), sides)
         if np.linalg.norm(step[:3]) < 2e-5 and np.linalg.norm(step[3:]) < 2e-5 * float(tvec[2, 0]):
             break
-    if result is None:
-        return None
-    return EdgeFit(*result, support=_support(img, model, camera, result[0], result[1]))
+    return None if result is None else EdgeFit(*result)
 
 
-def _support(img: np.ndarray, model: EdgeModel, camera: Camera, rvec, tvec) -> float:
+def edge_support(image: np.ndarray, model: EdgeModel, camera: Camera, rvec, tvec) -> float:
     """Share of samples along all the pad's visible sides that sit on a real edge.
 
     A look-alike shape can fit the H's corners, but the dark board around it,
     the side bars and the board's outline will not be where the pose says.
     """
+    img = image if image.dtype == np.float32 else image.astype(np.float32)
     samples = _samples(model, camera, rvec, tvec, 0.0)
     if samples is None:
         return 0.0
