@@ -39,22 +39,6 @@ def ippe_candidates(
     return [(r.copy(), t.copy()) for r, t in zip(rvecs, tvecs, strict=True) if t[2, 0] > 0]
 
 
-def refine_pose(
-    points_m: np.ndarray,
-    image_px: np.ndarray,
-    camera: Camera,
-    rvec: np.ndarray,
-    tvec: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, float]:
-    """Levenberg-Marquardt on all points from a starting pose; returns the RMS error too."""
-    obj = _object(points_m)
-    img = np.asarray(image_px, np.float64).reshape(-1, 1, 2)
-    rvec, tvec = cv2.solvePnPRefineLM(obj, img, camera.K, camera.dist, rvec.copy(), tvec.copy())
-    proj, _ = cv2.projectPoints(obj, rvec, tvec, camera.K, camera.dist)
-    rms = float(np.sqrt(np.mean(np.sum((proj - img) ** 2, axis=2))))
-    return rvec, tvec, rms
-
-
 def tilt_deg(rvec: np.ndarray) -> float:
     """Angle between the camera's optical axis and straight down onto the pad."""
     R_cam_pad, _ = cv2.Rodrigues(rvec)
