@@ -59,9 +59,11 @@ class FrameResult:
     """The pipeline's findings on one frame.
 
     ``corners_px``: the H's corners (N x 2, x then y, pixels of the input image),
-    in the reference's corner order when the H was matched. ``hu``: Hu's seven
-    invariants of the H's region (zeros when nothing was found). ``timings_ms``:
-    wall time per stage.
+    in the reference's corner order under the reported pose. ``hu``: Hu's seven
+    invariants of the H's region (NaN, JSON null, when nothing was found).
+    ``timings_ms``: wall time per stage. ``contour_px``: the H's boundary.
+    ``score``: the share of the pad's edges found where the pose puts them
+    (0..1). ``reason``: why nothing was detected.
     """
 
     detected: bool
