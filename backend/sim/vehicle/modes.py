@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 
+from backend.link.modes import COPTER_MODES
 from backend.sim.vehicle.control import (
     AttitudeController,
     PositionController,
@@ -20,34 +21,9 @@ from backend.sim.vehicle.physics import GRAVITY, Airframe, QuadBody
 from backend.sim.vehicle.precland import PrecLand
 from backend.sim.vehicle.state import Estimate, GuidedTarget
 
-# ArduCopter mode numbers and names (Mode::name()); 8, 10, 12, 26, 29 do not exist.
-MODE_NAMES: dict[int, str] = {
-    0: "STABILIZE",
-    1: "ACRO",
-    2: "ALT_HOLD",
-    3: "AUTO",
-    4: "GUIDED",
-    5: "LOITER",
-    6: "RTL",
-    7: "CIRCLE",
-    9: "LAND",
-    11: "DRIFT",
-    13: "SPORT",
-    14: "FLIP",
-    15: "AUTOTUNE",
-    16: "POSHOLD",
-    17: "BRAKE",
-    18: "THROW",
-    19: "AVOID_ADSB",
-    20: "GUIDED_NOGPS",
-    21: "SMARTRTL",
-    22: "FLOWHOLD",
-    23: "FOLLOW",
-    24: "ZIGZAG",
-    25: "SYSTEMID",
-    27: "AUTO_RTL",
-    28: "TURTLE",
-}
+# ArduCopter's mode numbers and names: the same table the GCS side knows
+# (8, 10, 12, 26 and 29 do not exist on a quad).
+MODE_NAMES: dict[int, str] = dict(COPTER_MODES)
 STABILIZE, ALT_HOLD, GUIDED, LOITER, RTL, LAND, POSHOLD, BRAKE = 0, 2, 4, 5, 6, 9, 16, 17
 SIMULATED_MODES = frozenset({STABILIZE, ALT_HOLD, GUIDED, LOITER, RTL, LAND, POSHOLD, BRAKE})
 # Modes whose Mode::requires_GPS() is true in ArduCopter.

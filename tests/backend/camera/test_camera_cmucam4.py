@@ -5,7 +5,6 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-import threading
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -30,23 +29,9 @@ from backend.camera.cmucam4 import (
 from backend.camera.rgb565 import decode_rgb565, encode_rgb565, read_dump_bmp
 from backend.sim.cmucam4 import CMUcam4Board, Faults
 
-pytestmark = pytest.mark.timeout(30)
+pytestmark = [pytest.mark.timeout(30), pytest.mark.usefixtures("no_leftover_threads")]
 SCALE = 0.02  # an SF 160x120 takes ~0.1 s instead of ~5 s
 ROOT = Path(__file__).resolve().parents[3]
-
-
-@pytest.fixture(autouse=True)
-def no_leftover_threads() -> Iterator[None]:
-    """Every test must stop the capture and board threads it started."""
-    yield
-    deadline = time.monotonic() + 2.0
-    names = ("camera-", "cmucam4-board")
-    while time.monotonic() < deadline:
-        alive = [t.name for t in threading.enumerate() if t.name.startswith(names)]
-        if not alive:
-            return
-        time.sleep(0.02)
-    pytest.fail(f"threads left running: {alive}")
 
 
 def picture(w: int = 160, h: int = 120, seed: int = 0) -> np.ndarray:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import threading
 import time
 from collections.abc import Callable, Iterator
 
@@ -16,22 +15,8 @@ from backend.camera.rgb565 import decode_rgb565, encode_rgb565
 from backend.camera.sim_source import PadRenderer, SimCameraConfig, VehiclePose
 from backend.sim.cmucam4 import CMUcam4Board, Faults
 
-pytestmark = pytest.mark.timeout(40)
+pytestmark = [pytest.mark.timeout(40), pytest.mark.usefixtures("no_leftover_threads")]
 SCALE = 0.02
-
-
-@pytest.fixture(autouse=True)
-def no_leftover_threads() -> Iterator[None]:
-    """Every test must stop the capture and board threads it started."""
-    yield
-    deadline = time.monotonic() + 2.0
-    names = ("camera-", "cmucam4-board")
-    while time.monotonic() < deadline:
-        alive = [t.name for t in threading.enumerate() if t.name.startswith(names)]
-        if not alive:
-            return
-        time.sleep(0.02)
-    pytest.fail(f"threads left running: {alive}")
 
 
 def quantised(img: np.ndarray) -> np.ndarray:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import itertools
-import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -15,21 +14,7 @@ import pytest
 from backend.camera import Frame, FrameSource, open_source
 from backend.camera.opencv_source import OpenCVSource
 
-pytestmark = pytest.mark.timeout(30)
-
-
-@pytest.fixture(autouse=True)
-def no_leftover_threads() -> Iterator[None]:
-    """Every test must stop the capture and board threads it started."""
-    yield
-    deadline = time.monotonic() + 2.0
-    names = ("camera-", "cmucam4-board")
-    while time.monotonic() < deadline:
-        alive = [t.name for t in threading.enumerate() if t.name.startswith(names)]
-        if not alive:
-            return
-        time.sleep(0.02)
-    pytest.fail(f"threads left running: {alive}")
+pytestmark = [pytest.mark.timeout(30), pytest.mark.usefixtures("no_leftover_threads")]
 
 
 def wait_until(pred, timeout: float = 5.0) -> bool:

@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 import threading
 import time
-from collections.abc import Iterator
 
 import cv2
 import numpy as np
@@ -24,21 +23,7 @@ from backend.camera.sim_source import (
 )
 from pipeline.render import camera_rotation, make_pad_image
 
-pytestmark = pytest.mark.timeout(30)
-
-
-@pytest.fixture(autouse=True)
-def no_leftover_threads() -> Iterator[None]:
-    """Every test must stop the capture and board threads it started."""
-    yield
-    deadline = time.monotonic() + 2.0
-    names = ("camera-", "cmucam4-board")
-    while time.monotonic() < deadline:
-        alive = [t.name for t in threading.enumerate() if t.name.startswith(names)]
-        if not alive:
-            return
-        time.sleep(0.02)
-    pytest.fail(f"threads left running: {alive}")
+pytestmark = [pytest.mark.timeout(30), pytest.mark.usefixtures("no_leftover_threads")]
 
 
 def wait_until(pred, timeout: float = 5.0) -> bool:

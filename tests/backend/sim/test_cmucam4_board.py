@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import subprocess
 import sys
-import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -16,22 +15,8 @@ import serial
 from backend.camera.rgb565 import encode_rgb565
 from backend.sim.cmucam4 import CMUcam4Board, Faults
 
-pytestmark = pytest.mark.timeout(30)
+pytestmark = [pytest.mark.timeout(30), pytest.mark.usefixtures("no_leftover_threads")]
 ROOT = Path(__file__).resolve().parents[3]
-
-
-@pytest.fixture(autouse=True)
-def no_leftover_threads() -> Iterator[None]:
-    """Every test must stop the capture and board threads it started."""
-    yield
-    deadline = time.monotonic() + 2.0
-    names = ("camera-", "cmucam4-board")
-    while time.monotonic() < deadline:
-        alive = [t.name for t in threading.enumerate() if t.name.startswith(names)]
-        if not alive:
-            return
-        time.sleep(0.02)
-    pytest.fail(f"threads left running: {alive}")
 
 
 @pytest.fixture
