@@ -31,7 +31,7 @@ MAX_SHAPE_RESIDUAL = 0.1  # homography fit RMS / sqrt(area): real H < 0.05, othe
 SOLIDITY_TOLERANCE = 0.12
 FINE_TRACE_BELOW_PX = 4000.0  # H's smaller than this are traced on a finer grid
 FINE_FACTOR = 4
-MIN_EDGE_SUPPORT = 0.6  # share of the pad's edges that must be where the pose says
+MIN_EDGE_SUPPORT = 0.45  # pad edges found where the pose puts them (look-alikes: < 0.3)
 AMBIGUOUS_FIT = 0.8  # two poses whose RMS errors are within this ratio are a tie
 
 

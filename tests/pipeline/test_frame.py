@@ -1,6 +1,7 @@
 import json
 import math
 
+import cv2
 import numpy as np
 import pytest
 
@@ -185,3 +186,33 @@ def test_bad_arguments(reference):
 def test_every_threshold_method_finds_a_clean_pad(reference, scene, method):
     frame = render(scene, CAM, np.array([0.0, 0.0, 1.5]), camera_rotation(15.0))
     assert process_frame(frame, reference, CAM, method=method).detected
+
+
+def _plain_h_pad(size: int = 1000) -> np.ndarray:
+    """Another pad design: no side bars, a bolder H, a gray board."""
+    pad = np.full((size, size, 3), 45, np.uint8)
+    s = size / 100
+    for x0, y0, x1, y1 in ((20, 18, 38, 82), (62, 18, 80, 82), (38, 42, 62, 58)):
+        cv2.rectangle(
+            pad,
+            (round(x0 * s), round(y0 * s)),
+            (round(x1 * s) - 1, round(y1 * s) - 1),
+            (235, 235, 235),
+            -1,
+        )
+    return pad
+
+
+@pytest.mark.parametrize("floor", ["asphalt", "grass", "concrete"])
+def test_another_pad_design_on_any_floor(floor):
+    pad = _plain_h_pad()
+    reference = Reference.from_image(pad, 0.8)
+    assert reference.bars_m == ()
+    scene = make_scene(pad, 0.8, rng=np.random.default_rng(6), floor=floor)
+    R = camera_rotation(-50.0, tilt_deg=5.0, tilt_dir_deg=200.0)
+    p = np.array([0.3, 0.2, 3.5])
+    frame = render(scene, CAM, p, R, snr_db=20.0, blur_sigma_px=0.8, rng=np.random.default_rng(2))
+    res = process_frame(frame, reference, CAM, yaw_hint=-50.0)
+    assert res.detected
+    pos_err, rot_err = _errors(res.pose, p, R)
+    assert pos_err < 2.0 and rot_err < 2.0
