@@ -16,7 +16,7 @@ import numpy as np
 
 from pipeline import Camera, Reference, process_frame
 from pipeline.draw import annotate
-from pipeline.preprocess import METHODS, binarize, subsample
+from pipeline.preprocess import DEFAULT_METHOD, METHODS, binarize, subsample
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -43,7 +43,7 @@ def _camera_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--hfov", type=float, default=60.0, help="horizontal field of view, degrees")
     p.add_argument("--calibration", type=Path, help="OpenCV calibration YAML/JSON")
     p.add_argument("--yaw-hint", type=float, help="camera yaw in the pad frame, degrees")
-    p.add_argument("--method", choices=METHODS, default="otsu", help="thresholding")
+    p.add_argument("--method", choices=METHODS, default=DEFAULT_METHOD, help="thresholding")
 
 
 def _read(path: Path) -> np.ndarray:
@@ -89,7 +89,7 @@ def _demo(args: argparse.Namespace) -> int:
     print(json.dumps(result.to_dict(), indent=2))
     truth = np.round(view.position_m, 3).tolist()
     print(f"true camera position (pad frame, m): {truth}", file=sys.stderr)
-    _write(args.out, frame, result, camera, "otsu")
+    _write(args.out, frame, result, camera, DEFAULT_METHOD)
     return 0
 
 

@@ -22,11 +22,10 @@ import numpy as np
 
 from pipeline import Camera, Reference, process_frame
 from pipeline.pose import TURN
-from pipeline.preprocess import METHODS
+from pipeline.preprocess import DEFAULT_METHOD, METHODS
 from pipeline.render import make_pad_image, make_scene, random_view, render_view
 
 PAD_SIZE_M = 0.55
-DEFAULT_METHOD = "otsu"
 _SCENE_EVERY = 10  # a new floor and new look-alikes every this many frames
 _ARUCO_DICT = cv2.aruco.DICT_4X4_50
 

@@ -20,7 +20,7 @@ from pipeline.pose import (
     tilt_deg,
     to_pose,
 )
-from pipeline.preprocess import METHODS, binarize, check_image, subsample
+from pipeline.preprocess import DEFAULT_METHOD, METHODS, binarize, check_image, subsample
 from pipeline.reference import H_CORNERS, Reference
 from pipeline.result import FrameResult
 from pipeline.shapes import Region, douglas_peucker, polygon_corners, regions, upsampled_contour
@@ -41,7 +41,7 @@ def process_frame(
     camera: Camera,
     *,
     yaw_hint: float | None = None,
-    method: str = "otsu",
+    method: str = DEFAULT_METHOD,
 ) -> FrameResult:
     """Find the reference's H in a frame and estimate the camera's pose over the pad.
 

@@ -9,10 +9,14 @@ Two thresholding methods, both selectable:
     the light changes: measured in ``python -m pipeline.bench``.
 ``"otsu"``
     Gaussian smoothing (for the sensor noise) and Otsu's global threshold,
-    which adapts to exposure. The default: it measured better (see the bench).
+    which adapts to exposure but not to light that changes across the frame.
 ``"adaptive"``
-    Gaussian smoothing and a local mean threshold: immune to light gradients,
-    but it fragments textured floors into many small regions.
+    Gaussian smoothing and a local mean threshold (41 px blocks): only what is
+    clearly brighter than its surroundings, like paint on a dark board, stays
+    white, whatever the light gradient. The default: on ``python -m
+    pipeline.bench`` it detected the most pads (200/200 against 198/200 for
+    Otsu and 197/200 for the seed's) with the same accuracy, and it is the
+    fastest, since a textured floor leaves fewer regions to examine.
 """
 
 from __future__ import annotations
@@ -22,7 +26,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-METHODS = ("otsu", "adaptive", "seed")
+METHODS = ("adaptive", "otsu", "seed")
+DEFAULT_METHOD = "adaptive"
 WORK_WIDTH = 640  # the seed's working resolution: 640 x 480
 
 
@@ -86,7 +91,7 @@ def seed_enhance(gray: np.ndarray) -> np.ndarray:
     return np.clip(g + smoothed, 0, 255)
 
 
-def binarize(image_bgr: np.ndarray, method: str = "otsu") -> Binarized:
+def binarize(image_bgr: np.ndarray, method: str = DEFAULT_METHOD) -> Binarized:
     """Threshold a BGR frame: white paint -> 255, everything else -> 0."""
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")

@@ -86,6 +86,8 @@ class Reference:
         if scale < 1.0:
             size = (round(w_img * scale), round(h_img * scale))
             work = cv2.resize(image, size, interpolation=cv2.INTER_AREA)
+        # A top-down picture has even light, and its H may be hundreds of pixels
+        # wide: a global threshold keeps its strokes whole.
         binary = binarize(work, "otsu")
         wh, ww = binary.mask.shape
         area = float(wh * ww)

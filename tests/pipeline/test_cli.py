@@ -7,6 +7,7 @@ import numpy as np
 
 from pipeline import Camera
 from pipeline.bench import run
+from pipeline.preprocess import DEFAULT_METHOD
 from pipeline.render import camera_rotation, make_pad_image, make_scene, render
 
 
@@ -59,7 +60,7 @@ def test_demo_writes_a_picture(tmp_path):
 
 
 def test_bench_reports_every_key():
-    out = run(2, 0, ["otsu"])
+    out = run(2, 0, [DEFAULT_METHOD])
     for key in ("detection_rate", "false_positive_rate", "position_error_pct",
                 "rotation_error_deg", "ms_per_frame", "stages_ms", "aruco",
                 "speed_ratio_vs_aruco"):  # fmt: skip
