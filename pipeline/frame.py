@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import time
+from typing import Protocol
 
 import cv2
 import numpy as np
@@ -35,6 +36,12 @@ MIN_EDGE_SUPPORT = 0.45  # pad edges found where the pose puts them (look-alikes
 AMBIGUOUS_FIT = 0.8  # two poses whose RMS errors are within this ratio are a tie
 
 
+class CandidateVerifier(Protocol):
+    """Checks a candidate's corner pattern (``pipeline.learn.Verifier`` is one)."""
+
+    def accepts(self, corners_px: np.ndarray, contour_px: np.ndarray, camera: Camera) -> bool: ...
+
+
 def process_frame(
     image_bgr: np.ndarray,
     reference: Reference,
@@ -42,6 +49,7 @@ def process_frame(
     *,
     yaw_hint: float | None = None,
     method: str = DEFAULT_METHOD,
+    verifier: CandidateVerifier | None = None,
 ) -> FrameResult:
     """Find the reference's H in a frame and estimate the camera's pose over the pad.
 
@@ -56,6 +64,9 @@ def process_frame(
         ``pipeline.result.yaw_of``), e.g. from the vehicle's heading: picks
         which of the two poses of a 180-degree-symmetric pad to report.
     method : thresholding, one of ``pipeline.preprocess.METHODS``.
+    verifier : an optional check of each H-shaped candidate's corner pattern
+        (the RBM/DBN of ``pipeline.learn``, trained for this reference),
+        consulted before the pose.
 
     Returns
     -------
@@ -98,7 +109,7 @@ def process_frame(
     ranked = _ranked(found, reference)
     clock.lap("contours")
 
-    shapes = 0
+    shapes = rejected = 0
     for region, hu in ranked:
         poly = None
         for reading in _corner_hypotheses(region, binary):
@@ -110,6 +121,12 @@ def process_frame(
         if poly is None:
             continue
         shapes += 1
+        if verifier is not None:
+            accepted = verifier.accepts(poly, region.contour, cam)
+            clock.lap("verify")
+            if not accepted:
+                rejected += 1
+                continue
         refined = refine_polygon(binary.smooth, poly)
         corners = refined[0] if refined is not None else poly
         clock.lap("refine")
@@ -140,6 +157,8 @@ def process_frame(
         reason = "no H-like shape in view"
     elif not shapes:
         reason = f"no H among {len(ranked)} H-like shape(s)"
+    elif rejected == shapes:
+        reason = f"the verifier rejected {shapes} H-shaped mark(s)"
     else:
         reason = f"{shapes} H-shaped mark(s), but no pad's edges around them"
     return _nothing(timings, t_start, reason)

@@ -216,3 +216,25 @@ def test_another_pad_design_on_any_floor(floor):
     assert res.detected
     pos_err, rot_err = _errors(res.pose, p, R)
     assert pos_err < 2.0 and rot_err < 2.0
+
+
+class _Verdict:
+    """A verifier that answers the same for every candidate, recording what it saw."""
+
+    def __init__(self, answer: bool) -> None:
+        self.answer = answer
+        self.seen: list[tuple[np.ndarray, np.ndarray]] = []
+
+    def accepts(self, corners_px, contour_px, camera) -> bool:
+        self.seen.append((corners_px, contour_px))
+        return self.answer
+
+
+def test_the_verifier_is_consulted_before_the_pose(reference, scene):
+    frame = render(scene, CAM, np.array([0.0, 0.0, 2.0]), camera_rotation(0.0))
+    yes, no = _Verdict(True), _Verdict(False)
+    assert process_frame(frame, reference, CAM, verifier=yes).detected
+    assert yes.seen and yes.seen[0][0].shape == (12, 2)
+    res = process_frame(frame, reference, CAM, verifier=no)
+    assert not res.detected and res.pose is None
+    assert "verifier rejected" in res.reason
