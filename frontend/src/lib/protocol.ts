@@ -59,6 +59,14 @@ export interface ReferenceSummary {
   symmetric: boolean;
   image_size: [number, number];
   images: { original: string; threshold: string; corners: string };
+  /** The corner-pattern verifier trained for this reference (RBM/DBN). */
+  verifier?: VerifierStatus;
+}
+
+export interface VerifierStatus {
+  state: "off" | "queued" | "training" | "ready" | "unavailable" | "failed";
+  progress: number;
+  detail: string;
 }
 
 export interface PoseDict {

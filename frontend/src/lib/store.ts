@@ -211,5 +211,10 @@ export class Store {
 
 function sameReference(a: ReferenceSummary | null, b: ReferenceSummary | null): boolean {
   if (a === null || b === null) return a === b;
-  return a.id === b.id && a.active === b.active;
+  return (
+    a.id === b.id &&
+    a.active === b.active &&
+    a.verifier?.state === b.verifier?.state &&
+    a.verifier?.progress === b.verifier?.progress
+  );
 }

@@ -34,6 +34,7 @@ export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
 
   const title = h("div", { class: "ref-title", "data-testid": "reference-name" }, "No active reference");
   const meta = h("div", { class: "caption", "data-testid": "reference-meta" });
+  const verifierLine = h("div", { class: "caption verifier-line", "data-testid": "reference-verifier" });
   const imgThreshold = h("img", { class: "ref-img", alt: "threshold mask of the reference", "data-testid": "reference-threshold" });
   const imgCorners = h("img", { class: "ref-img", alt: "corners found on the reference", "data-testid": "reference-corners-img" });
   const images = h(
@@ -62,7 +63,7 @@ export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
       h(
         "div",
         { class: "ref-layout" },
-        h("div", { class: "ref-main" }, title, meta, images),
+        h("div", { class: "ref-main" }, title, meta, verifierLine, images),
         h("div", { class: "ref-tables" }, cornersTable, invTable),
       ),
       h("h3", { class: "sub-title" }, "Earlier references"),
@@ -72,6 +73,7 @@ export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
 
   let shownId: string | null = null;
   function show(ref: ReferenceSummary | null): void {
+    showVerifier(ref);
     if (!ref) {
       setText(title, "No active reference");
       setText(meta, "");
@@ -105,6 +107,24 @@ export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
       h("tr", {}, h("th", {}, "Orientation"), h("td", { class: "num" }, fmt(ref.orientation_deg, 1, "°"))),
       h("tr", {}, h("th", {}, "Eccentricity"), h("td", { class: "num" }, fmt(ref.eccentricity, 3))),
     );
+  }
+
+  function showVerifier(ref: ReferenceSummary | null): void {
+    const v = ref?.verifier;
+    verifierLine.dataset.state = v?.state ?? "none";
+    if (!v) {
+      setText(verifierLine, "");
+      return;
+    }
+    const label: Record<string, string> = {
+      off: "pattern verifier off",
+      queued: "pattern verifier: waiting to train",
+      training: `pattern verifier: training ${Math.round(100 * v.progress)} %`,
+      ready: "pattern verifier: on",
+      unavailable: "pattern verifier off for this pad",
+      failed: "pattern verifier: training failed",
+    };
+    setText(verifierLine, `${label[v.state] ?? v.state}${v.detail ? ` · ${v.detail}` : ""}`);
   }
 
   async function refreshList(): Promise<void> {

@@ -93,6 +93,20 @@ describe("Store", () => {
     expect(store.reference?.id).toBe(2);
   });
 
+  it("shows the verifier's training progress as it changes", () => {
+    const store = new Store();
+    let refs = 0;
+    store.subscribe("reference", () => (refs += 1));
+    const training = (progress: number) => ({ ...REF, verifier: { state: "training" as const, progress, detail: "" } });
+    store.apply({ type: "status", ...STATUS, reference: training(0.1) });
+    store.apply({ type: "status", ...STATUS, reference: training(0.1) });
+    store.apply({ type: "status", ...STATUS, reference: training(0.3) });
+    expect(refs).toBe(2);
+    store.apply({ type: "status", ...STATUS, reference: { ...REF, verifier: { state: "ready", progress: 1, detail: "" } } });
+    expect(refs).toBe(3);
+    expect(store.reference?.verifier?.state).toBe("ready");
+  });
+
   it("keeps a bounded history of invariants and pairs images with their frame", () => {
     const store = new Store({ historySize: 5 });
     for (let seq = 1; seq <= 40; seq += 1) store.apply(frame(seq, seq % 2 === 0));
