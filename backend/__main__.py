@@ -38,6 +38,11 @@ _FLAGS: dict[str, tuple[str, type, str]] = {
     "--pad-north": ("pad_north", float, "pad centre north of home, m"),
     "--pad-east": ("pad_east", float, "pad centre east of home, m"),
     "--pad-heading": ("pad_heading_deg", float, "where the pad picture's top faces, deg"),
+    "--verifier-views": (
+        "verifier_views",
+        int,
+        "views the pattern verifier of a reference learns from (default 1000; 0: off)",
+    ),
 }
 
 

@@ -56,6 +56,9 @@ class Settings(BaseSettings):
     sim_ready_after: float = Field(1.0, gt=0, le=10)
     sim_speedup: float = Field(1.0, gt=0, le=50)
     sim_seed: int = 0
+    # Synthetic views the pattern verifier of each reference learns from (a
+    # minute or two of CPU in the background after an upload); 0 turns training off.
+    verifier_views: int = Field(1000, ge=0, le=20000)
     link_timeout_s: float = Field(3.0, gt=0, le=60)
     command_timeout_s: float = Field(3.0, gt=0, le=60)
 
