@@ -106,14 +106,14 @@ def process_frame(
 
     area = float(work.shape[0] * work.shape[1])
     found = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=0.5 * area)
-    ranked = _ranked(found, reference)
+    ranked = rank_candidates(found, reference)
     clock.lap("contours")
 
     shapes = rejected = 0
     for region, hu in ranked:
         poly = None
-        for reading in _corner_hypotheses(region, binary):
-            ordered, residual = _match_corners(reading, reference.corners_m, region.area)
+        for reading in corner_readings(region, binary):
+            ordered, residual = match_corners(reading, reference.corners_m, region.area)
             if residual <= MAX_SHAPE_RESIDUAL:
                 poly = ordered
                 break
@@ -121,15 +121,16 @@ def process_frame(
         if poly is None:
             continue
         shapes += 1
+        refined = refine_polygon(binary.smooth, poly)
+        corners = refined[0] if refined is not None else poly
+        clock.lap("refine")
         if verifier is not None:
-            accepted = verifier.accepts(poly, region.contour, cam)
+            # Refined corners: what the verifier sees does not depend on the threshold.
+            accepted = verifier.accepts(corners, region.contour, cam)
             clock.lap("verify")
             if not accepted:
                 rejected += 1
                 continue
-        refined = refine_polygon(binary.smooth, poly)
-        corners = refined[0] if refined is not None else poly
-        clock.lap("refine")
         fitted = _fit_pose(reference, binary.smooth, cam, corners)
         clock.lap("pose")
         if fitted is None:
@@ -164,7 +165,7 @@ def process_frame(
     return _nothing(timings, t_start, reason)
 
 
-def _ranked(found: list[Region], reference: Reference) -> list[tuple[Region, tuple]]:
+def rank_candidates(found: list[Region], reference: Reference) -> list[tuple[Region, tuple]]:
     """Regions shaped roughly like the reference's H, most alike first.
 
     Solidity and the first two Hu invariants are cheap and change little under
@@ -183,7 +184,7 @@ def _ranked(found: list[Region], reference: Reference) -> list[tuple[Region, tup
     return [(r, hu) for _, r, hu in out]
 
 
-def _corner_hypotheses(region: Region, binary):
+def corner_readings(region: Region, binary):
     """Ways to read the 12 corners of a candidate, best first.
 
     Curvature-scale-space corners on the boundary (traced on a 4x finer grid
@@ -208,7 +209,7 @@ def _corner_hypotheses(region: Region, binary):
         yield poly
 
 
-def _match_corners(poly: np.ndarray, ref_m: np.ndarray, area: float) -> tuple[np.ndarray, float]:
+def match_corners(poly: np.ndarray, ref_m: np.ndarray, area: float) -> tuple[np.ndarray, float]:
     """Rotate the corner list onto the reference's order; return it and the fit residual.
 
     All 12 cyclic shifts are scored at once by an affine fit (a few microseconds);

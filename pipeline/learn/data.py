@@ -41,15 +41,16 @@ import cv2
 import numpy as np
 
 from pipeline.camera import Camera
+from pipeline.edges import refine_polygon
 from pipeline.frame import (
     MAX_SHAPE_RESIDUAL,
     MIN_H_AREA_PX,
-    _corner_hypotheses,
-    _match_corners,
-    _ranked,
+    corner_readings,
+    match_corners,
+    rank_candidates,
 )
 from pipeline.learn.encoding import Encoder, kabsch_rotation, normalise
-from pipeline.preprocess import binarize, subsample
+from pipeline.preprocess import DEFAULT_METHOD, binarize, subsample
 from pipeline.reference import Reference
 from pipeline.render import (
     LOOKALIKE_KINDS,
@@ -124,34 +125,42 @@ class CandidateSet:
 
 
 def frame_candidates(
-    image: np.ndarray, reference: Reference, *, max_residual: float = TRAIN_GATE
+    image: np.ndarray,
+    reference: Reference,
+    *,
+    max_residual: float = TRAIN_GATE,
+    method: str = DEFAULT_METHOD,
 ) -> list[Candidate]:
     """The candidates process_frame would check in ``image``, residual up to ``max_residual``.
 
     The same steps as ``pipeline.process_frame`` up to its corner check
-    (subsample, Otsu, regions, solidity/Hu ranking, the readings of the 12
+    (subsample, threshold, regions, solidity/Hu ranking, the readings of the 12
     corners in turn, ordering and homography residual);
     coordinates are in the (subsampled) working image.
     """
     work, _ = subsample(image)
-    binary = binarize(work, "otsu")
+    binary = binarize(work, method)
     area = float(work.shape[0] * work.shape[1])
     found = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=0.5 * area)
     out = []
-    for region, hu in _ranked(found, reference):
+    for region, hu in rank_candidates(found, reference):
         # As process_frame: the first reading of the corners that passes the gate is
         # the one checked; when none does, the closest one (for training only).
         best = None
-        for reading in _corner_hypotheses(region, binary):
-            ordered, residual = _match_corners(reading, reference.corners_m, region.area)
+        for reading in corner_readings(region, binary):
+            ordered, residual = match_corners(reading, reference.corners_m, region.area)
             if best is None or residual < best[1]:
                 best = (ordered, residual)
             if residual <= MAX_SHAPE_RESIDUAL:
                 best = (ordered, residual)
                 break
         if best is not None and best[1] <= max_residual:
+            # The corners the verifier sees are refined on the gray edges, as in
+            # process_frame: they do not depend on the threshold.
+            refined = refine_polygon(binary.smooth, best[0])
+            corners = refined[0] if refined is not None else best[0]
             contour = region.contour.astype(np.float64)
-            out.append(Candidate(best[0], contour, float(best[1]), float(region.area), hu))
+            out.append(Candidate(corners, contour, float(best[1]), float(region.area), hu))
     return out
 
 

@@ -8,7 +8,7 @@ held-out H is still accepted: the verifier must not cost detections.
 
 process_frame calls ``verifier.accepts(corners, contour)`` for each candidate
 that passed its corner check: ``corners`` the 12 corners in the reference's
-order as ``_match_corners`` returns them, ``contour`` the region's boundary,
+order as ``match_corners`` returns them, ``contour`` the region's boundary,
 both in the same pixel coordinates.
 """
 
