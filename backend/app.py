@@ -21,7 +21,7 @@ from fastapi.staticfiles import StaticFiles
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from backend.api.routes import flights, health, reference, status, telemetry, vehicle
+from backend.api.routes import flights, health, missions, reference, status, telemetry, vehicle
 from backend.api.routes import settings as settings_routes
 from backend.api.ws import Hub
 from backend.settings import Settings, get_settings
@@ -166,7 +166,16 @@ def create_app(settings: Settings | None = None, *, station: Station | None = No
             status_code=500,
         )
 
-    for module in (health, status, telemetry, reference, vehicle, flights, settings_routes):
+    for module in (
+        health,
+        status,
+        telemetry,
+        reference,
+        vehicle,
+        flights,
+        missions,
+        settings_routes,
+    ):
         app.include_router(module.router, prefix="/api")
 
     @app.websocket("/ws")

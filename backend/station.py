@@ -7,8 +7,9 @@ each part with a timeout. The API layer talks only to this object.
 
 Threads: the link's own, the camera's capture thread, the vision worker, the
 recorder's writer, and one monitor here (10 Hz: flight start/stop on arm/disarm, the
-3D view). Listeners (the WebSocket hub) get events and processed frames from those
-threads and must hand them over without blocking.
+3D view); while a mission runs, its own thread (``backend.missions.manager``).
+Listeners (the WebSocket hub) get events, processed frames and mission states from
+those threads and must hand them over without blocking.
 """
 
 from __future__ import annotations
@@ -31,6 +32,8 @@ import numpy as np
 
 from backend.camera import FrameSource, open_source
 from backend.link import CommandResult, LinkEvent, LinkState, Telemetry, VehicleLink
+from backend.missions import LandConfig
+from backend.missions.manager import MissionManager
 from backend.recorder import Recorder
 from backend.settings import Settings, resolve_token
 from backend.storage import Storage
@@ -150,6 +153,7 @@ class Station:
         self.worker: VisionWorker | None = None
         self.recorder: Recorder | None = None
         self.viewer: Viewer3D | None = None
+        self.missions: MissionManager | None = None
         self.mavlink_url = settings.mavlink or ""
         self.camera_model: Camera | None = None
         self.runtime: dict[str, Any] = {}
@@ -216,6 +220,13 @@ class Station:
         self.worker.add_sink(self.recorder.submit)
         self.worker.add_sink(self._fan_out_frame)
         self.worker.start()
+        self.missions = MissionManager(
+            self.link,
+            lambda: self.worker.latest if self.worker is not None else None,
+            self.storage,
+            self.emit_event,
+            lambda snapshot: self._notify("mission", snapshot),
+        )
 
         if s.viser_port:
             active = self._active
@@ -260,6 +271,12 @@ class Station:
         if self._monitor is not None:
             self._monitor.join(5.0)
             self._monitor = None
+        if self.missions is not None:
+            try:
+                self.missions.close()  # a running mission is aborted while the link is up
+            except Exception:
+                log.exception("stopping the missions failed")
+            self.missions = None
         for name in ("worker", "recorder", "source", "viewer"):
             part = getattr(self, name)
             if part is not None:
@@ -289,7 +306,8 @@ class Station:
 
     # --- listeners (the WebSocket hub) ---------------------------------------------------
     def add_listener(self, listener: Listener) -> Callable[[], None]:
-        """``listener(kind, payload)``: kind "event" (dict) or "frame" (Processed)."""
+        """``listener(kind, payload)``: kind "event" (dict), "frame" (Processed) or
+        "mission" (the running mission's live state, dict)."""
         with self._listen_lock:
             self._listeners.append(listener)
 
@@ -621,6 +639,16 @@ class Station:
         }[name]
         return method(*args)
 
+    def land_config(self, **changes: Any) -> LandConfig:
+        """Mission settings for this station's pad (its place and heading from settings)."""
+        s = self.settings
+        return LandConfig(
+            pad_north_m=s.pad_north,
+            pad_east_m=s.pad_east,
+            pad_heading_deg=s.pad_heading_deg,
+            **changes,
+        )
+
     @property
     def telemetry(self) -> Telemetry | None:
         return None if self.link is None else self.link.telemetry
@@ -663,7 +691,7 @@ class Station:
             "link": link_status,
             "camera": camera_status,
             "pipeline": pipeline,
-            "mission": None,
+            "mission": self.missions.current() if self.missions is not None else None,
             "reference": self.reference_summary() if self.storage is not None else None,
             "flight": self.recorder.current if self.recorder is not None else None,
             "viser_url": self.viewer.url if self.viewer is not None else None,

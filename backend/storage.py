@@ -196,10 +196,19 @@ class Storage:
                 (time.time(), outcome, json.dumps(detail or {}), run_id),
             )
 
-    def list_mission_runs(self) -> list[dict]:
+    def list_mission_runs(self, limit: int | None = None) -> list[dict]:
+        """Mission runs, newest first (at most ``limit``)."""
         with self._lock:
-            rows = self._db.execute("SELECT * FROM mission_runs ORDER BY id DESC").fetchall()
+            rows = self._db.execute(
+                "SELECT * FROM mission_runs ORDER BY id DESC LIMIT ?",
+                (-1 if limit is None else int(limit),),
+            ).fetchall()
         return [{**dict(r), "detail": json.loads(r["detail"])} for r in rows]
+
+    def get_mission_run(self, run_id: int) -> dict | None:
+        with self._lock:
+            row = self._db.execute("SELECT * FROM mission_runs WHERE id = ?", (run_id,)).fetchone()
+        return None if row is None else {**dict(row), "detail": json.loads(row["detail"])}
 
     # --- events --------------------------------------------------------------------------
     def add_event(self, kind: str, text: str, data: dict | None = None, t: float | None = None):

@@ -6,6 +6,9 @@ what its slots hold when it can; a client that does not read blocks only its own
 sender while newer items overwrite the slots (counted as ``replaced``). Nothing ever
 waits for a client: not the pipeline, not the link, not the other clients.
 
+The status message also goes out whenever a running mission moves (its ``mission``
+field is the live state the precision-landing panel draws), not only once a second.
+
 Binary frames: 4-byte big-endian header length N, N bytes of UTF-8 JSON header
 (``kind``, ``seq``, ``t_capture``, ``width``, ``height``), then the JPEG bytes.
 """
@@ -244,6 +247,11 @@ class Hub:
         elif kind == "frame":
             item = self._encode_frame(payload)
             loop.call_soon_threadsafe(self._broadcast_frame, item)
+        elif kind == "mission":
+            # The live mission state rides in the status message (its "mission" field),
+            # sent at once instead of at the next 1 s tick: the precision-landing panel
+            # follows the mission at its pace, the latest-value slot keeps it bounded.
+            loop.call_soon_threadsafe(self._broadcast_status)
 
     def _encode_frame(self, processed: Processed) -> tuple[str, bytes | None, bytes | None]:
         # Encoded once per frame for all clients, on the worker's thread (a few ms).
@@ -270,6 +278,17 @@ class Hub:
     def _broadcast_event(self, event: dict) -> None:
         for client in self.clients:
             client.push_event(event)
+
+    def _broadcast_status(self) -> None:
+        if not self.clients:
+            return
+        try:
+            message = {"type": "status", **self.station.status()}
+        except Exception:
+            log.exception("building the status message failed")
+            return
+        for client in self.clients:
+            client.offer("status", message)
 
     def _broadcast_frame(self, item: tuple) -> None:
         for client in self.clients:

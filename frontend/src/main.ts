@@ -14,6 +14,7 @@ import { h } from "./widgets/dom";
 import { mountEventLog } from "./widgets/event-log";
 import { mountFlightPanel } from "./widgets/flight-panel";
 import { mountInvariants } from "./widgets/invariants";
+import { mountMissionPanel } from "./widgets/mission-panel";
 import { mountReferencePanel } from "./widgets/reference-panel";
 import { mountTopbar } from "./widgets/topbar";
 import { mountViserView } from "./widgets/viser-view";
@@ -67,6 +68,7 @@ function start(): void {
 
   mountFlightPanel(right, ctx);
   outcomes = mountControls(right, ctx);
+  mountMissionPanel(right, ctx);
   mountViserView(right, ctx);
   mountEventLog(right, ctx);
 

@@ -498,6 +498,38 @@ def test_missions_button_says_when_missions_are_missing(page, station: Station) 
     expect(page.get_by_test_id("abort")).to_be_in_viewport()
 
 
+def test_hover_then_land_by_vision_in_the_mission_panel(page, station: Station) -> None:
+    """After the take-off (and the hover the missions button started): the precision-
+    landing panel follows the mission live; abort it, land by GCS guidance, see the
+    touchdown error in the history."""
+    open_dashboard(page, station)
+    panel = page.get_by_test_id("mission")
+    expect(panel).to_be_visible()
+    state = page.get_by_test_id("mission-panel-state")
+    expect(state).to_contain_text("hover", timeout=20_000)
+    # over the pad the camera sees it: the estimate fills in
+    expect(page.get_by_test_id("field-estimate")).not_to_have_text("—", timeout=30_000)
+    page.get_by_test_id("abort").click()
+    expect(page.get_by_test_id("command-outcome")).to_contain_text("Abort")
+    expect(state).to_contain_text(re.compile("aborted|completed"), timeout=10_000)
+    page.get_by_test_id("mission-strategy").select_option("guided")
+    page.get_by_test_id("mission-land").click()
+    expect(page.get_by_test_id("mission-outcome")).to_have_text("Landing started (guided)")
+    expect(state).to_contain_text("land (guided)", timeout=10_000)
+    # velocity targets go out at the camera's pace: the last one is fresh
+    expect(page.get_by_test_id("field-targetAge")).to_contain_text("limits", timeout=20_000)
+    screenshot(page, "dashboard-mission-landing")
+    expect(state).to_contain_text("landed", timeout=120_000)
+    first = page.get_by_test_id("mission-history").locator("tbody tr").first
+    expect(first).to_contain_text("landed", timeout=10_000)
+    expect(first).to_contain_text("cm")
+    text = first.inner_text()
+    cm = number_in(text.split("landed", 1)[1])
+    assert cm is not None and cm < 25.0, text
+    screenshot(page, "dashboard-mission-landed")
+    assert not page.errors, page.errors
+
+
 def test_refusal_reasons_and_link_lost(page, tmp_path: Path) -> None:
     """A stand-in that is far from ready refuses to arm with its PreArm reasons,
     verbatim in the page; then it dies and the page shows the link as lost."""

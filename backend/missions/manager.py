@@ -1,0 +1,253 @@
+"""Runs one mission at a time for the station, in real time, on its own thread.
+
+The thread steps the mission every ``period_s`` with the vision worker's newest
+result, stores the run (``mission_runs``: started at once, finished with the whole
+record), reports state changes as station events and hands a live snapshot to the
+listeners (the WebSocket hub) at every step where something moved.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+from backend.missions.config import HoverConfig, LandConfig
+from backend.missions.hover import HoverMission
+from backend.missions.land import LandMission
+from backend.missions.mission import Mission, VisionSample
+
+log = logging.getLogger(__name__)
+
+PERIOD_S = 0.05
+JOIN_TIMEOUT_S = 5.0
+#: Live snapshots at most this often (the dashboard panel; the state changes go at once).
+SNAPSHOT_PERIOD_S = 0.2
+
+
+class MissionBusy(RuntimeError):
+    """A mission is already running."""
+
+
+class MissionManager:
+    """Start, watch and abort missions.
+
+    Parameters
+    ----------
+    link : VehicleLink
+        The station's link.
+    latest : callable
+        Returns the vision worker's newest ``Processed`` (or None).
+    storage : Storage or None
+        Where runs are stored.
+    emit_event : callable
+        ``emit_event(kind, text, data)``: the station's event log.
+    notify : callable
+        ``notify(snapshot)``: the live state, for the WebSocket hub.
+    period_s : float
+        Control period.
+    """
+
+    def __init__(
+        self,
+        link: Any,
+        latest: Callable[[], Any],
+        storage: Any,
+        emit_event: Callable[[str, str, dict], Any],
+        notify: Callable[[dict], None],
+        *,
+        period_s: float = PERIOD_S,
+    ) -> None:
+        if not period_s > 0:
+            raise ValueError(f"period_s must be > 0, got {period_s!r}")
+        self.link = link
+        self._latest = latest
+        self.storage = storage
+        self._emit = emit_event
+        self._notify = notify
+        self.period_s = float(period_s)
+        self._lock = threading.Lock()
+        self._mission: Mission | None = None
+        self._run_id: int | None = None
+        self._thread: threading.Thread | None = None
+        self._stop = threading.Event()
+        self._last: Mission | None = None
+
+    # --- the operator ------------------------------------------------------------------------
+    def start_land(self, config: LandConfig) -> dict:
+        """Start a landing; raises :class:`MissionBusy` when one runs."""
+        return self._start(lambda now, cb: LandMission(self.link, config, now=now, on_change=cb))
+
+    def start_hover(self, config: HoverConfig) -> dict:
+        """Start a hover; raises :class:`MissionBusy` when one runs."""
+        return self._start(lambda now, cb: HoverMission(self.link, config, now=now, on_change=cb))
+
+    def abort(self, reason: str = "operator abort") -> dict | None:
+        """Abort the running mission (acted on within one period); None when none runs."""
+        with self._lock:
+            mission = self._mission
+        if mission is None or mission.done:
+            return None
+        mission.abort(reason)
+        thread = self._thread
+        if thread is not None and thread is not threading.current_thread():
+            thread.join(JOIN_TIMEOUT_S)  # acted on, stored and reported
+        return self._snapshot(mission)
+
+    def current(self) -> dict | None:
+        """The running (or last) mission's live state; None before the first."""
+        with self._lock:
+            mission = self._mission or self._last
+        return None if mission is None else self._snapshot(mission)
+
+    @property
+    def running(self) -> bool:
+        with self._lock:
+            return self._mission is not None and not self._mission.done
+
+    def history(self, limit: int = 50) -> list[dict]:
+        """Stored runs, newest first, without their per-target logs."""
+        if self.storage is None:
+            return []
+        out = []
+        for row in self.storage.list_mission_runs(limit):
+            detail = row.get("detail") or {}
+            out.append(
+                {
+                    "id": row["id"],
+                    "kind": row["kind"],
+                    "started": row["started"],
+                    "ended": row["ended"],
+                    "outcome": row["outcome"],
+                    "strategy": detail.get("strategy"),
+                    "message": detail.get("message", ""),
+                    "touchdown": detail.get("touchdown"),
+                    "duration_s": detail.get("duration_s"),
+                    "frames": detail.get("frames"),
+                    "detections": detail.get("detections"),
+                    "targets_sent": detail.get("targets_sent"),
+                }
+            )
+        return out
+
+    def run(self, run_id: int) -> dict | None:
+        """One stored run with its whole record."""
+        if self.storage is None:
+            return None
+        return self.storage.get_mission_run(run_id)
+
+    def close(self) -> None:
+        """Abort a running mission (the station is going) and stop the thread."""
+        self.abort("the ground station is shutting down")
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(JOIN_TIMEOUT_S)
+            self._thread = None
+
+    # --- inside ------------------------------------------------------------------------------
+    def _start(self, make: Callable[[float, Callable[[Mission], None]], Mission]) -> dict:
+        old = self._thread
+        if old is not None and self._mission is not None and self._mission.done:
+            old.join(JOIN_TIMEOUT_S)  # the last one is storing its record (outside the lock)
+        with self._lock:
+            if self._mission is not None and not self._mission.done:
+                raise MissionBusy(
+                    f"a {self._mission.kind} mission is running ({self._mission.state}); "
+                    "abort it first"
+                )
+            if self._thread is not None and self._thread.is_alive():
+                raise MissionBusy("the last mission is still finishing")
+            mission = make(time.monotonic(), self._on_change)
+            self._mission = mission
+            self._stop.clear()
+            detail = {"strategy": mission.record.strategy, "config": mission.record.config}
+            self._run_id = (
+                self.storage.start_mission_run(mission.kind, detail) if self.storage else None
+            )
+            self._thread = threading.Thread(
+                target=self._loop, args=(mission,), name=f"mission-{mission.kind}", daemon=True
+            )
+            self._thread.start()
+        self._emit(
+            "mission",
+            f"{mission.kind} mission started" + self._strategy_text(mission),
+            {"mission": mission.kind, "state": mission.state, "run_id": self._run_id},
+        )
+        return self._snapshot(mission)
+
+    @staticmethod
+    def _strategy_text(mission: Mission) -> str:
+        strategy = mission.record.strategy
+        return f" ({strategy})" if strategy else ""
+
+    def _snapshot(self, mission: Mission) -> dict:
+        snap = mission.snapshot()
+        snap["run_id"] = self._run_id if mission is self._mission else None
+        # The run's record is in storage (GET /api/missions shows its outcome).
+        snap["stored"] = mission is self._last
+        return snap
+
+    def _on_change(self, mission: Mission) -> None:
+        last = mission.record.states[-1] if mission.record.states else {}
+        text = f"{mission.kind}: {mission.state}"
+        if last.get("reason"):
+            text += f" ({last['reason']})"
+        self._emit(
+            "mission",
+            text,
+            {"mission": mission.kind, "state": mission.state, "run_id": self._run_id},
+        )
+        self._notify(self._snapshot(mission))
+
+    def _loop(self, mission: Mission) -> None:
+        seen: object = None
+        last_notify = 0.0
+        next_t = time.monotonic()
+        try:
+            while not mission.done and not self._stop.is_set():
+                now = time.monotonic()
+                processed = self._latest()
+                sample = None
+                if processed is not None and processed is not seen:
+                    seen = processed
+                    sample = VisionSample(
+                        processed.result, processed.camera, processed.frame.t_capture
+                    )
+                mission.step(now, sample)
+                if now - last_notify >= SNAPSHOT_PERIOD_S:
+                    last_notify = now
+                    self._notify(self._snapshot(mission))
+                next_t += self.period_s
+                self._stop.wait(max(0.0, next_t - time.monotonic()))
+            if not mission.done:
+                mission.abort("the ground station is shutting down")
+                mission.step(time.monotonic())
+        except Exception as exc:  # a fault in one step must not leave the run unrecorded
+            log.exception("mission step failed")
+            mission.record.finish(time.monotonic(), "failed", f"internal error: {exc}")
+            mission.state = "failed"
+        finally:
+            self._finish(mission)
+
+    def _finish(self, mission: Mission) -> None:
+        rec = mission.record
+        if self.storage is not None and self._run_id is not None:
+            try:
+                self.storage.end_mission_run(self._run_id, rec.outcome or "failed", rec.to_dict())
+            except Exception:
+                log.exception("could not store the mission run")
+        self._emit(
+            "mission_done",
+            f"{mission.kind} mission {rec.outcome}: {rec.message}",
+            {
+                "mission": mission.kind,
+                "outcome": rec.outcome,
+                "run_id": self._run_id,
+                "touchdown": None if rec.touchdown is None else rec.touchdown.to_dict(),
+            },
+        )
+        with self._lock:
+            self._last = mission
+        self._notify(self._snapshot(mission))
