@@ -37,9 +37,10 @@ from backend.missions.manager import MissionManager
 from backend.recorder import Recorder
 from backend.settings import Settings, resolve_token
 from backend.storage import Storage
+from backend.verifier_training import VerifierStatus, VerifierTrainer
 from backend.viewer3d import Viewer3D
 from backend.vision_worker import Processed, VisionWorker
-from pipeline import Camera, Reference, process_frame
+from pipeline import Camera, FrameResult, Reference, process_frame
 from pipeline.render import make_pad_image
 
 log = logging.getLogger(__name__)
@@ -154,6 +155,7 @@ class Station:
         self.recorder: Recorder | None = None
         self.viewer: Viewer3D | None = None
         self.missions: MissionManager | None = None
+        self.trainer: VerifierTrainer | None = None
         self.mavlink_url = settings.mavlink or ""
         self.camera_model: Camera | None = None
         self.runtime: dict[str, Any] = {}
@@ -183,6 +185,11 @@ class Station:
         self.token, self.token_path = resolve_token(s)
         self.storage = Storage(self.data_dir / "visland.db")
         self.runtime = self._load_runtime()
+        self.trainer = VerifierTrainer(
+            lambda ref_id: self._reference_dir() / str(ref_id),
+            views=s.verifier_views,
+            on_change=self._on_verifier_change,
+        )
         self._load_initial_reference()
 
         if s.mavlink is None:
@@ -214,7 +221,7 @@ class Station:
             self.source,
             reference=self._current_reference,
             camera=self.camera_model,
-            process=process_frame,
+            process=self._process_frame,
             yaw_hint=self._yaw_hint,
         )
         self.worker.add_sink(self.recorder.submit)
@@ -271,6 +278,9 @@ class Station:
         if self._monitor is not None:
             self._monitor.join(5.0)
             self._monitor = None
+        if self.trainer is not None:
+            self.trainer.close()
+            self.trainer = None
         if self.missions is not None:
             try:
                 self.missions.close()  # a running mission is aborted while the link is up
@@ -572,6 +582,8 @@ class Station:
             self._active = ActiveReference(ref_id, reference, row)
         if self.viewer is not None:
             self.viewer.set_pad(reference.image, reference.pad_size_m)
+        if self.trainer is not None:
+            self.trainer.request(ref_id, reference)
         summary = self.reference_summary(row)
         if not quiet:
             self.emit_event(
@@ -601,7 +613,28 @@ class Station:
             "symmetric": data["symmetric"],
             "image_size": data["image_size"],
             "images": {k: f"/api/references/{rid}/image/{k}" for k in REFERENCE_IMAGES},
+            "verifier": None if self.trainer is None else self.trainer.status(rid).to_dict(),
         }
+
+    def _process_frame(
+        self, image_bgr: np.ndarray, reference: Reference, camera: Camera, *, yaw_hint=None
+    ) -> FrameResult:
+        """process_frame with the active reference's pattern verifier, once it is trained."""
+        active = self._active
+        verifier = None
+        if self.trainer is not None and active is not None and active.reference is reference:
+            verifier = self.trainer.verifier(active.id)
+        return process_frame(image_bgr, reference, camera, yaw_hint=yaw_hint, verifier=verifier)
+
+    def _on_verifier_change(self, ref_id: int, status: VerifierStatus) -> None:
+        # Progress reaches the dashboard in the reference summary of each status
+        # message; the outcome is also an event for the log.
+        if status.state in ("ready", "unavailable", "failed"):
+            self.emit_event(
+                "reference",
+                f"reference {ref_id}: {status.detail}",
+                {"id": ref_id, "verifier": status.to_dict()},
+            )
 
     def list_references(self) -> list[dict]:
         return [self.reference_summary(row) for row in self.storage.list_references()]

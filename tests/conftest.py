@@ -1,10 +1,8 @@
 """Shared test setup."""
 
-import pytest
+import os
 
-
-@pytest.fixture(autouse=True)
-def _no_verifier_training_by_default(monkeypatch):
-    # Training a reference's pattern verifier takes minutes of CPU; the tests that
-    # are about it ask for it, the others (and the servers they start) go without.
-    monkeypatch.setenv("VISLAND_VERIFIER_VIEWS", "0")
+# Training a reference's pattern verifier takes minutes of CPU: the tests that are
+# about it ask for it; the others, and the servers they start as subprocesses
+# (which inherit this environment), go without.
+os.environ.setdefault("VISLAND_VERIFIER_VIEWS", "0")
