@@ -23,6 +23,8 @@ from collections import deque
 
 import numpy as np
 
+from backend.frames import rot_ned_body, rot_ned_pad
+
 log = logging.getLogger(__name__)
 
 # ENU from NED: swap north/east, flip down.
@@ -32,30 +34,13 @@ _IMAGE_FLIP = np.diag([1.0, -1.0, -1.0])
 R_BODY_CAM = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 
 
-def rotation_ned_body(roll: float, pitch: float, yaw: float) -> np.ndarray:
-    """Body FRD -> NED rotation from MAVLink ATTITUDE angles (ZYX: yaw, pitch, roll)."""
-    cr, sr = math.cos(roll), math.sin(roll)
-    cp, sp = math.cos(pitch), math.sin(pitch)
-    cy, sy = math.cos(yaw), math.sin(yaw)
-    return np.array(
-        [
-            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-            [-sp, cp * sr, cp * cr],
-        ]
-    )
-
-
 def rotation_world_pad(heading_deg: float) -> np.ndarray:
     """Pad frame -> world (ENU) for a pad whose picture top faces ``heading_deg``.
 
     The heading is clockwise from north. Pad +y (picture top) points along the heading,
     pad +x (picture right) 90 degrees clockwise from it, pad +z up.
     """
-    psi = math.radians(heading_deg)
-    x_axis = [math.cos(psi), -math.sin(psi), 0.0]
-    y_axis = [math.sin(psi), math.cos(psi), 0.0]
-    return np.column_stack([x_axis, y_axis, [0.0, 0.0, 1.0]])
+    return _ENU_FROM_NED @ rot_ned_pad(heading_deg)
 
 
 def browsable_host(host: str) -> str:
@@ -202,7 +187,7 @@ class Viewer3D:
                 if position_ned is not None and attitude_rpy is not None:
                     p = _ENU_FROM_NED @ np.asarray(position_ned, float)
                     vehicle.position = p
-                    vehicle.wxyz = _wxyz(_ENU_FROM_NED @ rotation_ned_body(*attitude_rpy))
+                    vehicle.wxyz = _wxyz(_ENU_FROM_NED @ rot_ned_body(*attitude_rpy))
                     vehicle.visible = True
                     if not self._trail or np.linalg.norm(self._trail[-1] - p) > 0.05:
                         self._trail.append(p)

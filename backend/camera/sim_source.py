@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from backend.camera import CaptureError, ThreadedSource
+from backend.frames import rot_ned_body, rot_ned_pad
 from pipeline.camera import Camera
 
 #: Looking straight down, image top = vehicle forward (columns: cam x, y, z in body FRD).
@@ -133,26 +134,6 @@ class SimCameraConfig:
     @property
     def camera(self) -> Camera:
         return Camera.from_fov(int(self.width), int(self.height), float(self.hfov_deg))
-
-
-def rot_ned_body(roll: float, pitch: float, yaw: float) -> np.ndarray:
-    """``R_ned_body`` for MAVLink ATTITUDE angles (ZYX: yaw, then pitch, then roll)."""
-    cr, sr = math.cos(roll), math.sin(roll)
-    cp, sp = math.cos(pitch), math.sin(pitch)
-    cy, sy = math.cos(yaw), math.sin(yaw)
-    Rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
-    Ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
-    Rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
-    return Rz @ Ry @ Rx
-
-
-def rot_ned_pad(pad_heading_deg: float) -> np.ndarray:
-    """``R_ned_pad``: columns are the pad's x (picture right), y (picture top), z (up)."""
-    psi = math.radians(pad_heading_deg)
-    x = [-math.sin(psi), math.cos(psi), 0.0]
-    y = [math.cos(psi), math.sin(psi), 0.0]
-    z = [0.0, 0.0, -1.0]
-    return np.column_stack([x, y, z])
 
 
 def camera_pose_in_pad_frame(

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from backend.frames import rot_ned_body
 from pipeline import Camera, Pose
 
 #: Looking straight down, image top = vehicle nose (columns: cam x, y, z in body FRD).
@@ -27,20 +28,6 @@ def wrap180(deg: float) -> float:
 def wrap90(deg: float) -> float:
     """An angle modulo the H's 180-degree symmetry, wrapped to [-90, 90)."""
     return (float(deg) + 90.0) % 180.0 - 90.0
-
-
-def rot_ned_body(roll: float, pitch: float, yaw: float) -> np.ndarray:
-    """``R_ned_body`` for MAVLink ATTITUDE angles (radians, ZYX order)."""
-    cr, sr = math.cos(roll), math.sin(roll)
-    cp, sp = math.cos(pitch), math.sin(pitch)
-    cy, sy = math.cos(yaw), math.sin(yaw)
-    return np.array(
-        [
-            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-            [-sp, cp * sr, cp * cr],
-        ]
-    )
 
 
 def camera_yaw_hint(pad_heading_deg: float, vehicle_yaw_rad: float) -> float:
@@ -114,18 +101,19 @@ def pad_fix(
 ) -> PadFix:
     """Turn a vision pose into a :class:`PadFix`.
 
-    ``attitude_rpy``: the vehicle's roll, pitch, yaw (rad) when the frame was taken,
-    used only to express the offset in NED; the body-frame target and the heading
-    error come from the vision pose alone.
+        ``attitude_rpy``: the vehicle's roll, pitch, yaw (rad) when the frame was taken,
+        used only to express the offset in NED; the body-frame target and the heading
+        error come from the vision pose alone.
 
-    Examples
-    --------
-    >>> from pipeline import Camera, Pose
-    >>> R = np.diag([1.0, -1.0, -1.0])  # looking down, picture upright
-    >>> pose = Pose(np.array([0.2, -0.1, 3.0]), R, 0.5, True)  # 0.2 m east, 0.1 m south
-    >>> fix = pad_fix(pose, Camera.from_fov(640, 480, 60), (0, 0, 0), t_capture=0, time_usec=0)
-    >>> [round(v, 2) for v in fix.target_frd], round(fix.heading_error_deg, 1)
-    ([0.1, -0.2, 3.0], 0.0)
+        Examples
+        --------
+        >>> from backend.frames import rot_ned_body
+    from pipeline import Camera, Pose
+        >>> R = np.diag([1.0, -1.0, -1.0])  # looking down, picture upright
+        >>> pose = Pose(np.array([0.2, -0.1, 3.0]), R, 0.5, True)  # 0.2 m east, 0.1 m south
+        >>> fix = pad_fix(pose, Camera.from_fov(640, 480, 60), (0, 0, 0), t_capture=0, time_usec=0)
+        >>> [round(v, 2) for v in fix.target_frd], round(fix.heading_error_deg, 1)
+        ([0.1, -0.2, 3.0], 0.0)
     """
     R_pc = np.asarray(pose.R_pad_cam, float)
     p = np.asarray(pose.position_m, float).reshape(3)

@@ -14,29 +14,14 @@ from backend.camera.sim_source import (
     SimCameraConfig,
     VehiclePose,
     camera_pose_in_pad_frame,
-    rot_ned_body,
-    rot_ned_pad,
 )
 from backend.station import camera_yaw_in_pad
 from backend.viewer3d import (
-    _ENU_FROM_NED,
     R_BODY_CAM,
     Viewer3D,
-    rotation_ned_body,
-    rotation_world_pad,
 )
 from pipeline.render import make_pad_image
 from pipeline.result import yaw_of
-
-
-@pytest.mark.parametrize("heading", [0.0, 37.0, -120.0, 180.0])
-def test_pad_placement_matches_the_simulated_camera(heading):
-    assert np.allclose(_ENU_FROM_NED @ rot_ned_pad(heading), rotation_world_pad(heading))
-
-
-@pytest.mark.parametrize("rpy", [(0, 0, 0), (0.1, -0.2, 2.5), (-0.3, 0.05, -1.0)])
-def test_attitude_matches_the_simulated_camera(rpy):
-    assert np.allclose(rotation_ned_body(*rpy), rot_ned_body(*rpy))
 
 
 def test_camera_mount_matches_the_simulated_camera():
