@@ -488,7 +488,7 @@ def test_take_off_is_confirmed_and_happens(page, station: Station) -> None:
 
 def test_missions_button_says_when_missions_are_missing(page, station: Station) -> None:
     open_dashboard(page, station)
-    text = send_command(page, "hover", confirm=False)
+    text = send_command(page, "hover", confirm=True)
     if station.status_code("/api/missions/current") in (404, 405):
         assert "missions not available yet" in text, text
     else:
@@ -513,7 +513,11 @@ def test_hover_then_land_by_vision_in_the_mission_panel(page, station: Station) 
     expect(page.get_by_test_id("command-outcome")).to_contain_text("Abort")
     expect(state).to_contain_text(re.compile("aborted|completed"), timeout=10_000)
     page.get_by_test_id("mission-strategy").select_option("guided")
-    page.get_by_test_id("mission-land").click()
+    land = page.get_by_test_id("mission-land")
+    land.click()
+    expect(land).to_have_attribute("data-confirming", "true")
+    expect(page.get_by_test_id("mission-outcome")).not_to_have_text("Landing started (guided)")
+    land.click()
     expect(page.get_by_test_id("mission-outcome")).to_have_text("Landing started (guided)")
     expect(state).to_contain_text("land (guided)", timeout=10_000)
     # velocity targets go out at the camera's pace: the last one is fresh

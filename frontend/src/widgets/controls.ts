@@ -4,10 +4,10 @@
 
 import { type CommandOutcome, MISSIONS_UNAVAILABLE } from "../lib/api";
 import { readTelemetry } from "../lib/telemetry";
+import { confirmButton } from "./confirm";
 import { type Ctx, h, panel, setText } from "./dom";
 
 const MODES = ["GUIDED", "LOITER", "ALT_HOLD", "POSHOLD", "BRAKE", "STABILIZE", "LAND", "RTL"];
-const CONFIRM_WINDOW_MS = 6000;
 
 export interface Outcomes {
   show(title: string, outcome: CommandOutcome): void;
@@ -49,34 +49,7 @@ export function mountControls(root: HTMLElement, ctx: Ctx): Outcomes {
 
   /** A button that needs a second click within a few seconds to act. */
   function confirmed(label: string, testid: string, cls: string, action: () => Promise<CommandOutcome>): HTMLElement {
-    const main = h("button", { class: `btn ${cls}`, "data-testid": testid, type: "button" }, label);
-    const cancel = h("button", { class: "btn btn-ghost", "data-testid": `${testid}-cancel`, type: "button", hidden: true }, "Cancel");
-    let armedUntil = 0;
-    let timer: ReturnType<typeof setTimeout> | null = null;
-    const reset = () => {
-      armedUntil = 0;
-      if (timer) clearTimeout(timer);
-      timer = null;
-      setText(main, label);
-      main.classList.remove("confirming");
-      main.dataset.confirming = "false";
-      cancel.hidden = true;
-    };
-    main.addEventListener("click", () => {
-      if (Date.now() < armedUntil) {
-        reset();
-        void run(label, main, action);
-        return;
-      }
-      armedUntil = Date.now() + CONFIRM_WINDOW_MS;
-      setText(main, `Confirm ${label.toLowerCase()}?`);
-      main.classList.add("confirming");
-      main.dataset.confirming = "true";
-      cancel.hidden = false;
-      timer = setTimeout(reset, CONFIRM_WINDOW_MS);
-    });
-    cancel.addEventListener("click", reset);
-    return h("div", { class: "confirm-group" }, main, cancel);
+    return confirmButton(label, testid, cls, (button) => void run(label, button, action));
   }
 
   function plain(label: string, testid: string, cls: string, action: () => Promise<CommandOutcome>): HTMLButtonElement {
@@ -124,7 +97,7 @@ export function mountControls(root: HTMLElement, ctx: Ctx): Outcomes {
     h(
       "div",
       { class: "control-row" },
-      plain("Hover over pad", "hover", "btn-primary", () => api.mission("hover")),
+      confirmed("Hover over pad", "hover", "btn-primary", () => api.mission("hover")),
       confirmed("Land on pad", "land-pad", "btn-primary", () => api.mission("land")),
     ),
     missionState,

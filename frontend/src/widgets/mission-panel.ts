@@ -4,6 +4,7 @@
 // the last one), and the history of runs with their touchdown errors.
 
 import { fmt } from "../lib/format";
+import { confirmButton } from "./confirm";
 import { type Ctx, COLORS, fields, fitCanvas, h, panel, rafThrottle, setText } from "./dom";
 
 /** ArduPilot's AC_PrecLand: a measurement is used for 1 s, the target lost after 2 s. */
@@ -60,16 +61,15 @@ export function mountMissionPanel(root: HTMLElement, ctx: Ctx): void {
     h("option", { value: "guided" }, "GCS guidance (GUIDED)"),
   );
   const outcome = h("div", { class: "caption", "data-testid": "mission-outcome" }, "");
-  const landButton = h("button", { class: "btn btn-primary", "data-testid": "mission-land" }, "Land on pad");
-  landButton.addEventListener("click", async () => {
-    landButton.disabled = true;
+  const landButton = confirmButton("Land on pad", "mission-land", "btn-primary", async (button) => {
+    button.disabled = true;
     try {
       const result = await api.mission("land", { strategy: strategy.value });
       setText(outcome, result.ok ? `Landing started (${strategy.value})` : result.message);
       outcome.dataset.ok = String(result.ok);
       if (result.status === 401) document.dispatchEvent(new CustomEvent("visland:need-token"));
     } finally {
-      landButton.disabled = false;
+      button.disabled = false;
     }
   });
   const historyBody = h("tbody", {});
