@@ -11,7 +11,7 @@ import numpy as np
 
 from pipeline.camera import Camera
 from pipeline.edgefit import edge_support, fit_edges
-from pipeline.edges import refine_polygon
+from pipeline.edges import refine_polygon, surround_ratio
 from pipeline.moments import hu_distance, shape_moments
 from pipeline.pose import (
     ippe_candidates,
@@ -33,6 +33,8 @@ SOLIDITY_TOLERANCE = 0.12
 FINE_TRACE_BELOW_PX = 4000.0  # H's smaller than this are traced on a finer grid
 FINE_FACTOR = 4
 MIN_EDGE_SUPPORT = 0.45  # pad edges found where the pose puts them (look-alikes: < 0.3)
+# Around a real H the board is dark; a look-alike on a floor is framed by floor.
+SURROUND_MARGIN = 0.3  # frame's surround ratio may exceed the reference's by this
 AMBIGUOUS_FIT = 0.8  # two poses whose RMS errors are within this ratio are a tie
 
 
@@ -109,7 +111,7 @@ def process_frame(
     ranked = rank_candidates(found, reference)
     clock.lap("contours")
 
-    shapes = rejected = 0
+    shapes = rejected = unframed = 0
     for region, hu in ranked:
         poly = None
         for reading in corner_readings(region, binary):
@@ -136,6 +138,11 @@ def process_frame(
         if fitted is None:
             continue
         fit, support = fitted
+        outline = project(reference.corners_m, fit.rvec, fit.tvec, cam)
+        if surround_ratio(binary.smooth, outline, 2.5) > reference.surround_ratio + SURROUND_MARGIN:
+            unframed += 1
+            clock.lap("pose")
+            continue
         pose = pick_by_yaw(to_pose(fit.rvec, fit.tvec, fit.rms_px, reference.symmetric), yaw_hint)
         # Corner i is where reference corner i lies under the reported pose
         # (for a symmetric pad the twin pose numbers the corners 6 apart).
@@ -160,6 +167,8 @@ def process_frame(
         reason = f"no H among {len(ranked)} H-like shape(s)"
     elif rejected == shapes:
         reason = f"the verifier rejected {shapes} H-shaped mark(s)"
+    elif unframed:
+        reason = f"{unframed} H-shaped mark(s) without the pad's dark board around them"
     else:
         reason = f"{shapes} H-shaped mark(s), but no pad's edges around them"
     return _nothing(timings, t_start, reason)

@@ -10,7 +10,7 @@ import cv2
 import numpy as np
 
 from pipeline.edgefit import EdgeModel
-from pipeline.edges import refine_polygon
+from pipeline.edges import refine_polygon, surround_ratio
 from pipeline.moments import shape_moments
 from pipeline.preprocess import binarize, check_image
 from pipeline.shapes import corner_angles, polygon_corners, regions
@@ -45,6 +45,7 @@ class Reference:
     eccentricity: float
     solidity: float
     symmetric: bool
+    surround_ratio: float
 
     @cached_property
     def edge_model(self) -> EdgeModel:
@@ -128,6 +129,10 @@ class Reference:
         outline = np.array([[-0.5, -0.5], [ww - 0.5, -0.5], [ww - 0.5, wh - 0.5], [-0.5, wh - 0.5]])
         outline_m = to_m(outline) if np.mean(rim > 0) < 0.02 else None
         mom = shape_moments(h_region.contour)
+        # How dark the pad is right around the H, relative to the H: frames must
+        # show the same (a look-alike painted on a floor does not).
+        h_span_px = float(np.ptp(h_poly, axis=0).max())
+        surround = surround_ratio(binary.smooth, h_poly, max(2.5, 0.03 * h_span_px))
         corners_px = (h_poly + 0.5) / scale - 0.5
         return cls(
             pad_size_m=pad_size_m,
@@ -143,6 +148,7 @@ class Reference:
             eccentricity=float(mom.eccentricity),
             solidity=float(h_region.solidity),
             symmetric=_is_symmetric(corners_m, bars_m),
+            surround_ratio=surround,
         )
 
     def to_dict(self) -> dict:
@@ -159,6 +165,7 @@ class Reference:
             "eccentricity": self.eccentricity,
             "solidity": self.solidity,
             "symmetric": self.symmetric,
+            "surround_ratio": self.surround_ratio,
         }
 
 

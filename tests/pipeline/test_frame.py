@@ -238,3 +238,14 @@ def test_the_verifier_is_consulted_before_the_pose(reference, scene):
     res = process_frame(frame, reference, CAM, verifier=no)
     assert not res.detected and res.pose is None
     assert "verifier rejected" in res.reason
+
+
+def test_an_h_without_the_dark_board_around_it_is_not_the_pad(reference):
+    # The same H and bars painted straight onto a gray floor: every edge is where the
+    # pad's would be, but the board around the H is missing.
+    painted = make_pad_image(1100, board_bgr=(140, 140, 140))
+    scene = make_scene(painted, 0.55, rng=np.random.default_rng(5), floor="plain")
+    frame = render(scene, CAM, np.array([0.1, 0.1, 2.0]), camera_rotation(30.0))
+    res = process_frame(frame, reference, CAM)
+    assert not res.detected
+    assert "dark board" in res.reason
