@@ -35,6 +35,7 @@ FINE_FACTOR = 4
 MIN_EDGE_SUPPORT = 0.45  # pad edges found where the pose puts them (look-alikes: < 0.3)
 # Around a real H the board is dark; a look-alike on a floor is framed by floor.
 SURROUND_MARGIN = 0.3  # frame's surround ratio may exceed the reference's by this
+SURROUND_OFFSET_PX = 2.5  # sampled this far either side of the H's edges
 AMBIGUOUS_FIT = 0.8  # two poses whose RMS errors are within this ratio are a tie
 
 
@@ -138,8 +139,9 @@ def process_frame(
         if fitted is None:
             continue
         fit, support = fitted
-        outline = project(reference.corners_m, fit.rvec, fit.tvec, cam)
-        if surround_ratio(binary.smooth, outline, 2.5) > reference.surround_ratio + SURROUND_MARGIN:
+        h_px = project(reference.corners_m, fit.rvec, fit.tvec, cam)
+        surround = surround_ratio(binary.smooth, h_px, SURROUND_OFFSET_PX)
+        if surround > reference.surround_ratio + SURROUND_MARGIN:
             unframed += 1
             clock.lap("pose")
             continue
