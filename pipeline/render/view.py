@@ -143,10 +143,12 @@ def random_view(
     margin_px: float = 8.0,
     lighting: bool = True,
     realistic: bool = False,
+    min_tilt_deg: float = 0.0,
 ) -> View:
     """A random pose and degradations, as the accuracy benchmark samples them.
 
-    Altitude uniform in ``altitude`` (metres), tilt uniform in [0, max_tilt_deg] toward
+    Altitude uniform in ``altitude`` (metres), tilt uniform in [min_tilt_deg,
+    max_tilt_deg] (a fixed tilt when they are equal) toward
     a uniform direction, yaw uniform, the pad's centre at a uniform image position
     such that (with ``whole_pad_in_view``) all four board corners are at least
     ``margin_px`` inside the image; SNR uniform in ``snr_db`` (None: no noise), blur
@@ -170,6 +172,9 @@ def random_view(
     max_tilt = _finite(max_tilt_deg, "max_tilt_deg")
     if not 0 <= max_tilt < 60:
         raise ValueError(f"max_tilt_deg must be in [0, 60), got {max_tilt}")
+    min_tilt = _finite(min_tilt_deg, "min_tilt_deg")
+    if not 0 <= min_tilt <= max_tilt:
+        raise ValueError(f"min_tilt_deg must be in [0, max_tilt_deg], got {min_tilt}")
     snr = None if snr_db is None else _range(snr_db, "snr_db", -math.inf)
     blur = _finite(max_blur_px, "max_blur_px")
     if blur < 0:
@@ -186,7 +191,7 @@ def random_view(
     for _attempt in range(200):
         alt = float(rng.uniform(alt_lo, alt_hi))
         yaw = float(rng.uniform(-180.0, 180.0))
-        tilt = float(rng.uniform(0.0, max_tilt))
+        tilt = float(rng.uniform(min_tilt, max_tilt))
         tdir = float(rng.uniform(0.0, 360.0))
         R = camera_rotation(yaw, tilt_deg=tilt, tilt_dir_deg=tdir)
         if whole_pad_in_view:
