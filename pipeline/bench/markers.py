@@ -7,6 +7,8 @@ the four detected corners), so the comparison is between detectors, not solvers.
 
 from __future__ import annotations
 
+import atexit
+import functools
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -89,9 +91,7 @@ class AprilTagDetector:
     name: str = "apriltag"
 
     def __post_init__(self) -> None:
-        from pupil_apriltags import Detector
-
-        self._det = Detector(families=APRILTAG_FAMILY, nthreads=1, quad_decimate=APRILTAG_DECIMATE)
+        self._det = _shared_apriltag_detector()
 
     def pose(self, frame: np.ndarray, camera: Camera) -> Pose | None:
         gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY) if frame.ndim == 3 else frame
@@ -102,6 +102,26 @@ class AprilTagDetector:
         # bottom-right in the tag's own frame; IPPE_SQUARE wants TL, TR, BR, BL.
         c = np.asarray(hits[0].corners, np.float64)[[1, 0, 3, 2]]
         return _square_pose(c, self.size_m, camera)
+
+
+@functools.cache
+def _shared_apriltag_detector():
+    """One detector for the whole process, never destroyed.
+
+    pupil-apriltags 1.0.4 frees the tag family before the detector that still uses
+    it (pupil-labs/apriltags PR #65, unreleased): destroying a Detector corrupts the
+    heap, which aborted a sweep at random. So the one detector lives until exit and
+    is then left to the operating system.
+    """
+    from pupil_apriltags import Detector
+
+    det = Detector(families=APRILTAG_FAMILY, nthreads=1, quad_decimate=APRILTAG_DECIMATE)
+
+    def _leak() -> None:
+        det.tag_detector_ptr = None  # __del__ then frees nothing
+
+    atexit.register(_leak)
+    return det
 
 
 def settings() -> dict:
