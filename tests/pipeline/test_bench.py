@@ -115,3 +115,20 @@ def test_plot_helpers() -> None:
     img = line_panel({"a": ([1, 2, 3], [0.1, None, 10.0])}, title="t", xlabel="x", ylabel="y",
                      log_y=True)  # fmt: skip
     assert img.shape == (340, 760, 3) and (img < 128).any()
+
+
+def test_report_writes_markdown_and_figures(tmp_path) -> None:
+    from pipeline.bench.report import SNRS_DB, write_report
+
+    out = write_report(str(tmp_path), frames=1, sweep=False, rbm=False)
+    json.dumps(out)
+    md = (tmp_path / "report.md").read_text()
+    assert "| the seed | we measure | agree |" in md and "0.02" in md and "36" in md
+    for name in ("fig5_3_invariants.png", "fig5_3_pose.png", "fig5_4_corner_pca.png"):
+        assert name in out["figures"] and cv2.imread(str(tmp_path / name)) is not None
+    adaptive = out["noise"]["methods"][DEFAULT_METHOD]
+    assert [p["snr_db"] for p in adaptive["points"]] == list(SNRS_DB)
+    # At 60 dB the H is found and its invariants are those of the clean view.
+    top = adaptive["points"][-1]
+    assert top["detection_rate"] == 1.0 and top["hu1"]["median"] < 1e-3
+    assert {row["agree"] for row in out["comparison"]} <= {"yes", "no", "partly", "-"}
