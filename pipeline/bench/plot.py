@@ -58,6 +58,8 @@ def line_panel(
     img = np.full((h, w, 3), 255, np.uint8)
     xs_all = [float(x) for xs, _ in series.values() for x in xs]
     ys_all = [float(y) for _, ys in series.values() for y in ys if y is not None]
+    if log_y:  # zeros and negatives have no place on a log axis (they leave gaps)
+        ys_all = [y for y in ys_all if y > 0]
     ys_all += [v for v, _ in hlines]
     fy = (lambda v: math.log10(max(v, 1e-12))) if log_y else (lambda v: v)
     x0, x1 = (min(xs_all), max(xs_all)) if xs_all else (0.0, 1.0)
