@@ -289,3 +289,24 @@ def test_realistic_views_cover_every_degradation() -> None:
             assert 30 <= v.jpeg_quality <= 95
     assert all(n > 5 for n in seen.values()), seen
     assert max(tilts) > 25
+
+
+def test_cli_renders_a_design(tmp_path, capsys) -> None:
+    from pipeline.render.__main__ import main as cli_main
+
+    out = tmp_path / "icao.png"
+    argv = [
+        "--out",
+        str(out),
+        "--design",
+        "icao",
+        "--realistic",
+        "--width",
+        "160",
+        "--height",
+        "120",
+    ]
+    assert cli_main(argv) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert info["design"] == "icao" and info["view"]["position_m"][2] > 4.5 / 0.55 * 0.99
+    assert cv2.imread(str(out)).shape == (120, 160, 3)
