@@ -382,7 +382,7 @@ _INK: BGR = (42, 40, 44)
 
 def _seed_pad() -> Design:
     g = PadGeometry()
-    bars = Rects(tuple(tuple(float(v) for v in r) for r in g._bar_rects()))  # type: ignore[misc]
+    bars = Rects(tuple(g._bar_rects()))
     return Design(
         name="default",
         description="the seed's pad: white block H and side bars on a black 0.55 m board",
