@@ -75,6 +75,9 @@ def line_panel(
         x1 = x0 + 1.0
     if y1 <= y0:
         y1 = y0 + 1.0
+    if ylim is None:  # a margin so that no point sits on the frame
+        pad = 0.06 * (y1 - y0)
+        y0, y1 = (y0 if y0 == 0.0 and not log_y else y0 - pad), y1 + pad
     pw, ph = w - left - right, h - top - bottom
 
     def to_px(x: float, y: float) -> tuple[int, int]:
@@ -87,9 +90,12 @@ def line_panel(
             u = to_px(t, 10**y0 if log_y else y0)[0]
             cv2.line(img, (u, top), (u, top + ph), _GRID, 1)
             cv2.putText(img, _label(t), (u - 12, top + ph + 18), _FONT, 0.42, _INK, 1, cv2.LINE_AA)
-    yticks = (
-        [10**k for k in range(math.floor(y0), math.ceil(y1) + 1)] if log_y else nice_ticks(y0, y1)
-    )
+    if log_y:  # decades, and 2 and 5 times them when the axis spans few decades
+        steps = (1, 2, 5) if y1 - y0 < 2.5 else (1,)
+        decades = range(math.floor(y0), math.ceil(y1) + 1)
+        yticks = [m * 10.0**k for k in decades for m in steps]
+    else:
+        yticks = nice_ticks(y0, y1)
     for t in yticks:
         if y0 - 1e-9 <= fy(t) <= y1 + 1e-9:
             v = to_px(x0, t)[1]
