@@ -501,6 +501,7 @@ def markdown(result: dict) -> str:
     lines += ["## Seed against ours", "", "| the seed | we measure | agree |", "|---|---|---|"]
     for row in result["comparison"]:
         lines.append(f"| {row['claim']} | {row['ours']} | {row['agree']} |")
+    lines += ["", "### Reading", "", *_reading(result), ""]
     lines += ["", "## 1. Invariants and pose against SNR (figure 5.3)", ""]
     lines += ["![invariants](fig5_3_invariants.png)", "", "![pose](fig5_3_pose.png)", ""]
     for method, m in result["noise"]["methods"].items():
@@ -560,6 +561,32 @@ def markdown(result: dict) -> str:
         lines += [f"Not run: {rbm.get('error')}", ""]
     lines += [f"Run time: {result['seconds']} s.", ""]
     return "\n".join(lines)
+
+
+def _reading(result: dict) -> list[str]:
+    """Why the figures agree or not: what each side measured."""
+    ours = result["noise"]["methods"].get(DEFAULT_METHOD, {})
+    clean_rot = ours.get("clean", {}).get("rotation_error_deg")
+    out = [
+        "- The 0.02 degrees are the seed's moment orientation (eq. 4.16) of noisy copies "
+        "against the clean image, not a pose: our moment orientation error is of that order "
+        "only at high SNR and grows as the SNR falls. The pose's rotation error is another "
+        "quantity: on this view it is "
+        f"{_fmt(clean_rot)} degrees already without noise (a bias of the pose, not of the "
+        "noise), which no SNR improves.",
+        "- Translation: the H's centroid moves by a small fraction of a pixel at any SNR "
+        "we tried; the seed's 'translation-axis correlation' holds.",
+        "- The seed fed CSS corners of the whole thresholded frame, false corners from the "
+        "background among them, to its PCA; ours are the 12 corners of the detected H under "
+        "its pose, so their spread is sub-pixel and mostly a rigid shift: the irregularity "
+        "of figure 5.4 came from the false corners, not from the H.",
+        "- The seed's 36 % came from corner pairs labelled at random (its chapter 6 says "
+        "so); ours labels each candidate from the renderer's truth and measures on held-out "
+        "candidates, hence the far lower error of the same kind of model.",
+    ]
+    if result["rbm"].get("rbm_error") is None:
+        out[-1] = "- The RBM experiment did not run: " + str(result["rbm"].get("error"))
+    return out
 
 
 def _json(d: dict) -> str:
