@@ -90,7 +90,7 @@ def fit_edges(
             break
         points, normal, side_id = samples
         proj, jac = _project(points, rvec, tvec, camera)
-        delta, ok = _edge_offsets(img, proj, normal, search)
+        delta, ok = edge_offsets(img, proj, normal, search)
         if np.count_nonzero(ok) < 12:
             break
         # Residual: how far the model edge lies from the found edge, along the normal.
@@ -132,7 +132,7 @@ def edge_support(image: np.ndarray, model: EdgeModel, camera: Camera, rvec, tvec
         return 0.0
     points, normal, _ = samples
     proj, _ = _project(points, rvec, tvec, camera)
-    delta, ok = _edge_offsets(img, proj, normal, 1.5)
+    delta, ok = edge_offsets(img, proj, normal, 1.5)
     h, w = img.shape[:2]
     seen = (proj[:, 0] > 2) & (proj[:, 1] > 2) & (proj[:, 0] < w - 3) & (proj[:, 1] < h - 3)
     if not seen.any():
@@ -178,12 +178,28 @@ def _clearance_m(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def _samples(model: EdgeModel, camera: Camera, rvec, tvec, min_clearance_px: float):
     """Model points along every side measurable in the image, with image normals."""
-    a_m, b_m = model.a_m, model.b_m
-    ends, _ = _project(np.vstack([a_m, b_m]), rvec, tvec, camera)
-    pa, pb = ends[: len(a_m)], ends[len(a_m) :]
+    ends, _ = _project(np.vstack([model.a_m, model.b_m]), rvec, tvec, camera)
     R, _ = cv2.Rodrigues(rvec)
-    depth = 0.5 * (a_m + b_m) @ R[2, :2] + float(tvec[2, 0])
+    depth = 0.5 * (model.a_m + model.b_m) @ R[2, :2] + float(tvec[2, 0])
     clearance_px = model.clearance_m * camera.fx / np.maximum(depth, 1e-6)
+    n = len(model.a_m)
+    return side_samples(model, ends[:n], ends[n:], clearance_px >= min_clearance_px)
+
+
+def side_samples(
+    model: EdgeModel,
+    pa: np.ndarray,
+    pb: np.ndarray,
+    usable: np.ndarray,
+    min_side_px: float = MIN_SIDE_PX,
+):
+    """Points along the model's sides that are long enough in the image.
+
+    ``pa``/``pb``: the sides' ends in the image; ``usable``: sides clear of
+    their neighbours. Returns (points in pad metres, unit image normals from
+    the bright side of each edge to the dark side, side index), or None.
+    """
+    a_m, b_m = model.a_m, model.b_m
     # Each polygon's orientation in the image tells which way is outward;
     # normals point from the bright side of an edge to the dark side.
     cross = pa[:, 0] * pb[:, 1] - pb[:, 0] * pa[:, 1]
@@ -192,15 +208,16 @@ def _samples(model: EdgeModel, camera: Camera, rvec, tvec, min_clearance_px: flo
     sign = np.where(model.bright, orient, -orient)
     d = pb - pa
     length = np.hypot(d[:, 0], d[:, 1])
-    use = np.flatnonzero((length >= MIN_SIDE_PX) & (clearance_px >= min_clearance_px))
+    use = np.flatnonzero((length >= min_side_px) & usable)
     if len(use) == 0:
         return None
-    counts = np.clip((length[use] - 2 * END_MARGIN_PX) / SAMPLE_STEP_PX, 3, MAX_SAMPLES_PER_SIDE)
+    margin = np.minimum(END_MARGIN_PX, 0.25 * length[use])
+    counts = np.clip((length[use] - 2 * margin) / SAMPLE_STEP_PX, 3, MAX_SAMPLES_PER_SIDE)
     counts = counts.astype(int)
     side = np.repeat(use, counts)
     first = np.concatenate([[0], np.cumsum(counts)[:-1]])
     k = np.arange(len(side)) - np.repeat(first, counts)
-    f = END_MARGIN_PX / length[side]
+    f = np.repeat(margin, counts) / length[side]
     t = f + (1 - 2 * f) * k / np.maximum(np.repeat(counts, counts) - 1, 1)
     points = a_m[side] + t[:, None] * (b_m[side] - a_m[side])
     u = d[side] / length[side][:, None]
@@ -211,7 +228,7 @@ def _samples(model: EdgeModel, camera: Camera, rvec, tvec, min_clearance_px: flo
 _OFFSETS = np.arange(-3.0, 3.01, 0.5)
 
 
-def _edge_offsets(img: np.ndarray, proj: np.ndarray, normal: np.ndarray, search: float):
+def edge_offsets(img: np.ndarray, proj: np.ndarray, normal: np.ndarray, search: float):
     """Signed distance along each normal from the projected point to the image edge."""
     offsets = _OFFSETS[np.abs(_OFFSETS) <= search + 1e-6]
     step = float(offsets[1] - offsets[0])
