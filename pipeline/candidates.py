@@ -14,7 +14,7 @@ H's edges where it puts them.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import cv2
@@ -26,14 +26,17 @@ from pipeline.reference import H_CORNERS, Reference
 from pipeline.shapes import Region, douglas_peucker, polygon_corners, upsampled_contour
 
 MIN_H_AREA_PX = 24.0  # smaller regions carry too few pixels for an H
-MIN_SHAPE_IOU = 0.5  # whitened overlap with the reference's H (look-alikes rank below)
+MIN_H_SPAN_PX = 12.0  # nor can an H narrower than this be told from a blob of texture
+MIN_SHAPE_IOU = 0.4  # whitened overlap with the reference's H (look-alikes rank below)
 MAX_SHAPE_RESIDUAL = 0.1  # CSS corners: homography RMS / sqrt(area) (real H < 0.05)
 MIN_H_SUPPORT = 0.6  # share of the H's sides found on the channel's edges
+CONFIDENT_SUPPORT = 0.9  # a fit this good is not tried from another start
 # Edge support plus shape overlap: two views of how much of an H this is. Real
-# H's, even drawn with other proportions than the reference's, reach 1.4 and
-# up; H-ish blobs of grass or noise stay under 1.3.
-MIN_EVIDENCE = 1.35
-MIN_BLOB_SEPARATION = 2.5  # the region against the band around it, in pooled std devs
+# H's, even drawn with other proportions than the reference's, reach 1.45 and
+# up; H-ish blobs of grass or sensor noise stay under 1.4 (measured on the
+# shared real photos and the bench's floors).
+MIN_EVIDENCE = 1.45
+MIN_BLOB_SEPARATION = 3.0  # the region against the band around it, in pooled std devs
 FINE_TRACE_BELOW_PX = 4000.0  # H's smaller than this are traced on a finer grid
 FINE_FACTOR = 4
 MAX_LOCATED = 6  # candidates fitted per frame at most, best shape first
@@ -41,12 +44,16 @@ MAX_LOCATED = 6  # candidates fitted per frame at most, best shape first
 
 @dataclass(frozen=True, eq=False)
 class Candidate:
-    """A region shaped like the H: its boundary, shape overlap and Hu invariants."""
+    """A region shaped like the H: its boundary and shape overlap."""
 
     region: Region
     iou: float
     affine: np.ndarray  # 2 x 3, pad metres -> pixels, from the shape match
-    hu: tuple[float, ...]
+
+    @property
+    def hu(self) -> tuple[float, ...]:
+        """Hu's seven invariants of the region (the seed's moments)."""
+        return tuple(cv2.HuMoments(cv2.moments(self.region.contour.reshape(-1, 1, 2))).ravel())
 
 
 @dataclass(frozen=True, eq=False)
@@ -71,11 +78,12 @@ def candidates(found: list[Region], reference: Reference) -> list[Candidate]:
     for r in found:
         if not lo <= r.solidity <= 0.97:
             continue
-        hit = reference.shape.match(r.contour)
-        if hit is None or hit.iou < MIN_SHAPE_IOU:
+        if float(np.ptp(r.contour, axis=0).max()) < MIN_H_SPAN_PX:
             continue
-        hu = tuple(cv2.HuMoments(cv2.moments(r.contour.reshape(-1, 1, 2))).ravel())
-        out.append(Candidate(r, hit.iou, hit.affine, hu))
+        hit = reference.shape.match(r.contour, MIN_SHAPE_IOU)
+        if hit is None:
+            continue
+        out.append(Candidate(r, hit.iou, hit.affine))
     out.sort(key=lambda c: -c.iou)
     return out
 
@@ -92,39 +100,54 @@ def locate_all(found: list[Region], binary: Binarized, reference: Reference) -> 
 def locate(
     cand: Candidate, binary: Binarized, reference: Reference, smooth: np.ndarray
 ) -> Located | None:
-    """Fit the H's sides from the candidate's CSS corners and from its shape match.
+    """Fit the H's sides from the candidate's shape match, then if that does not
+    find them well, from its CSS corners (the seed's reading); the fit that
+    finds more of the H's edges wins.
 
-    Both starts are fitted (CSS corners of a small blurred H may be read in a
-    skewed order that converges to a stretched H); the fit that finds more of
-    the H's edges wins.
+    The affine start of the shape match needs no corners at all: it holds for
+    thin strokes, serifs and blur that leave CSS a skewed reading (which may
+    converge to a stretched H). The seed's corners do better on a bold H drawn
+    with other proportions than the reference's.
     """
-    starts: list[tuple[str, np.ndarray]] = []
-    css = css_corners(cand.region, binary, reference)
-    if css is not None:
-        H, _ = cv2.findHomography(reference.corners_m, css, 0)
-        if H is not None:
-            starts.append(("css", H))
-    starts.append(("shape", np.vstack([cand.affine, [0.0, 0.0, 1.0]])))
     span = math.sqrt(cand.region.area)
     best: Located | None = None
-    for name, H0 in starts:
-        # An affine start may be a few pixels off on a tilted view; CSS corners less.
-        search = 2.5 if name == "css" else float(np.clip(0.12 * span, 2.5, 3.0))
+    for name in ("shape", "css"):
+        if name == "shape":
+            H0 = np.vstack([cand.affine, [0.0, 0.0, 1.0]])
+            # An affine start may be a few pixels off on a tilted view.
+            search = float(np.clip(0.12 * span, 2.5, 3.0))
+        else:
+            css = css_corners(cand.region, binary, reference)
+            H0 = None if css is None else cv2.findHomography(reference.corners_m, css, 0)[0]
+            if H0 is None:
+                continue
+            search = 2.5
         fit = fit_homography(smooth, reference.h_edges, H0, search_px=search)
         if fit is None or fit.support < MIN_H_SUPPORT:
             continue
+        corners = apply_h(fit.H, reference.corners_m)
+        if float(np.ptp(corners, axis=0).max()) < MIN_H_SPAN_PX:
+            continue
         if best is None or (fit.support, -fit.rms_px) > (best.fit.support, -best.fit.rms_px):
-            best = Located(cand, apply_h(fit.H, reference.corners_m), fit, name)
+            best = Located(cand, corners, fit, name)
+        if best is not None and best.fit.support >= CONFIDENT_SUPPORT:
+            break  # the H's edges were found: no need for another start
     return best
 
 
-def blob_separation(smooth: np.ndarray, region: Region, stroke_px: float) -> float:
+def blob_separation(
+    smooth: np.ndarray,
+    region: Region,
+    stroke_px: float,
+    board_only: Callable[[np.ndarray], np.ndarray] | None = None,
+) -> float:
     """How clearly a region stands out from the band around it: (mean inside - mean
     of the band) / pooled standard deviation, on the smoothed channel.
 
     A painted H is uniform on a uniform board; an H-ish blob of grass or sensor
     noise has more of the same around it. The band starts a pixel out (past the
-    blurred edge) and is a stroke wide.
+    blurred edge) and is a stroke wide; ``board_only`` (frame pixels, N x 2 ->
+    bool) keeps the band's pixels that are board.
     """
     c = region.contour.reshape(-1, 1, 2).astype(np.int32)
     x, y, w, h = cv2.boundingRect(c)
@@ -139,7 +162,14 @@ def blob_separation(smooth: np.ndarray, region: Region, stroke_px: float) -> flo
     near = cv2.dilate(m, k3)
     far = cv2.dilate(m, np.ones((2 * reach + 1, 2 * reach + 1), np.uint8))
     patch = smooth[y0:y1, x0:x1].astype(np.float64)
-    inside, band = patch[core > 0], patch[(far > 0) & (near == 0)]
+    band_mask = (far > 0) & (near == 0)
+    if board_only is not None:
+        # Pixels the reference shows painted (a ring or a frame close to the H)
+        # are not board.
+        ys, xs = np.nonzero(band_mask)
+        keep = board_only(np.column_stack([xs + x0, ys + y0]).astype(np.float64))
+        band_mask[ys[~keep], xs[~keep]] = False
+    inside, band = patch[core > 0], patch[band_mask]
     if len(inside) < 4 or len(band) < 4:
         return math.nan
     pooled = math.sqrt(0.5 * (float(inside.var()) + float(band.var())))

@@ -13,6 +13,7 @@ works on that channel exactly as it would on gray.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -44,14 +45,14 @@ class Projection:
         v = _CUBE @ np.asarray(self.weights)
         return float(v.min()), float(v.max())
 
-    @property
+    @cached_property
     def matrix(self) -> np.ndarray:
         """1 x 4 matrix for ``cv2.transform`` (scale folded into the weights, then offset)."""
         lo, hi = self._range
         k = 255.0 / (hi - lo)
         return np.array([[*(np.asarray(self.weights) * k), -lo * k]], np.float32)
 
-    @property
+    @cached_property
     def is_gray(self) -> bool:
         """Whether this is BT.601 luma or its inverse (colour plays no part)."""
         w = np.asarray(self.weights) / np.abs(np.sum(self.weights))
@@ -69,6 +70,9 @@ class Projection:
         """The channel (uint8, same height and width) of a BGR uint8 image."""
         if image_bgr.ndim == 2:
             return self.apply_gray(image_bgr)
+        if self.is_gray:  # plain or inverted luma: OpenCV's own conversion is faster
+            gray = cv2.cvtColor(image_bgr, cv2.COLOR_BGR2GRAY)
+            return gray if self.polarity == "bright" else cv2.bitwise_not(gray)
         out = cv2.transform(image_bgr, self.matrix)
         return out.reshape(image_bgr.shape[:2])
 
@@ -117,6 +121,10 @@ def learn_projection(
     if np.dot(w, diff) <= 0:  # cannot happen with a positive-definite matrix; keep it safe
         w = diff
     w = w / np.abs(w).sum()
+    if np.all(np.abs(w - np.sign(w[0]) / 3.0) < 0.1):
+        # Achromatic: plain (or inverted) luma separates it as well, and every
+        # camera, colour or not, sees the same.
+        return GRAY if w[0] > 0 else GRAY.inverted()
     return Projection(tuple(float(v) for v in w))  # type: ignore[arg-type]
 
 

@@ -6,6 +6,7 @@ import math
 import time
 from typing import Protocol
 
+import cv2
 import numpy as np
 
 from pipeline.camera import Camera
@@ -17,11 +18,12 @@ from pipeline.candidates import (
     locate_all,
 )
 from pipeline.edgefit import EdgeFit, edge_support, fit_edges
+from pipeline.homography_fit import apply_h, fit_homography
+from pipeline.homography_fit import support as edge_share
 from pipeline.moments import shape_moments
 from pipeline.pose import (
     ippe_candidates,
     pick_by_yaw,
-    pose_to_vectors,
     project,
     tilt_deg,
     to_pose,
@@ -38,11 +40,18 @@ from pipeline.reference import Reference
 from pipeline.result import FrameResult
 from pipeline.shapes import regions
 from pipeline.strokes import MAX_DIP, deepest_dip, stroke_samples
-from pipeline.template import template_ncc
+from pipeline.template import compare
 
 MIN_EDGE_SUPPORT = 0.45  # the H's edges found where the pose puts them
 MIN_TEMPLATE_NCC = 0.4  # with the reference picture around the H
+BOARD_TOLERANCE = 0.2  # the board's brightness relative to the H's, against the reference's
+MAX_HUE = 0.3  # the board's chromaticity, L1 distance to the reference's
 AMBIGUOUS_FIT = 0.8  # two poses whose RMS errors are within this ratio are a tie
+WIDE_SEARCH_PX = 6.0  # how far the whole pad's edges are first looked for
+SELF_SUFFICIENT_PX = 100.0  # an H this large pins the pose by itself
+MIN_MARKS_FOUND = 0.5  # of the marks' resolvable sides, for the whole pad to count
+MARK_SIDE_PX = 4.0  # a mark's straight side shorter than this (a star's point) is not told
+_HALF_TURN = np.diag([-1.0, -1.0, 1.0])  # pad metres turned about the centre
 
 
 class CandidateVerifier(Protocol):
@@ -118,28 +127,40 @@ def process_frame(
     found = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=0.5 * area)
     clock.lap("contours")
 
-    located = rejected = unclear = unlike = broken = 0
+    located = rejected = unclear = unlike = unframed = broken = 0
     for hit in locate_all(found, binary, reference):
         located += 1
         clock.lap("corners")
         stroke = reference.leg_fraction * float(np.ptp(hit.corners, axis=0).max())
-        blob = blob_separation(binary.smooth, hit.candidate.region, stroke)
+        H_inv = np.linalg.inv(hit.fit.H)
+        blob = blob_separation(
+            binary.smooth,
+            hit.candidate.region,
+            stroke,
+            lambda px, Hi=H_inv: ~reference.is_paint(apply_h(Hi, px)),
+        )
         if hit.evidence < MIN_EVIDENCE or not blob >= MIN_BLOB_SEPARATION:
             unclear += 1
             clock.lap("check")
             continue
-        ncc = template_ncc(
+        seen = compare(
+            work,
             binary.smooth,
             reference.template_pyramid,
             reference.channel_px_per_m,
             reference.corners_m,
             hit.fit.H,
         )
-        if ncc < MIN_TEMPLATE_NCC:  # nan (a patch too small to compare) passes
+        # nan (a patch too small to compare, a board too dark for a hue) passes.
+        if seen.ncc < MIN_TEMPLATE_NCC:
             unlike += 1
             clock.lap("check")
             continue
-        samples = stroke_samples(reference.corners_m, hit.fit.H, reference.bars_m)
+        if abs(seen.board - seen.reference_board) > BOARD_TOLERANCE or seen.hue > MAX_HUE:
+            unframed += 1
+            clock.lap("check")
+            continue
+        samples = stroke_samples(reference.corners_m, hit.fit.H, reference.is_paint)
         if deepest_dip(work, reference.projection.weights, samples) > MAX_DIP:
             broken += 1
             clock.lap("check")
@@ -152,15 +173,24 @@ def process_frame(
             if not accepted:
                 rejected += 1
                 continue
-        fitted = _fit_pose(reference, binary.smooth, cam, hit.corners)
+        H = _whole_pad(hit.fit.H, reference, binary.smooth)
+        # With the pad's other marks found, or a lens whose distortion the
+        # homography cannot follow, the pose is refined on the edges.
+        polish = H is not hit.fit.H or cam.has_distortion
+        H = _heading(H, reference, binary.smooth)
+        fitted = _fit_pose(reference, binary.smooth, cam, H, polish=polish)
         clock.lap("pose")
         if fitted is None:
             continue
         fit, support = fitted
-        pose = pick_by_yaw(to_pose(fit.rvec, fit.tvec, fit.rms_px, reference.symmetric), yaw_hint)
-        # Corner i is where reference corner i lies under the reported pose
-        # (for a symmetric pad the twin pose numbers the corners 6 apart).
-        corners = project(reference.corners_m, *pose_to_vectors(pose), cam)
+        found_pose = to_pose(fit.rvec, fit.tvec, fit.rms_px, reference.symmetric)
+        pose = pick_by_yaw(found_pose, yaw_hint)
+        # The corners as found on the frame (they do not depend on the camera
+        # model), numbered for the reported pose: corner i is where reference
+        # corner i lies; the twin of a symmetric pad numbers them 6 apart.
+        corners = apply_h(H, reference.corners_m)
+        if pose is not found_pose:
+            corners = np.roll(corners, -6, axis=0)
         region = hit.candidate.region
         mom = shape_moments(region.contour)
         timings["total"] = (time.perf_counter() - t_start) * 1e3
@@ -187,6 +217,8 @@ def process_frame(
         reason = f"{unclear} H-shaped mark(s), none clearly an H on a plain board"
     elif unlike:
         reason = f"{unlike} H-shaped mark(s) that do not look like the reference picture"
+    elif unframed:
+        reason = f"{unframed} H-shaped mark(s) without the pad's board around them"
     elif broken:
         reason = f"{broken} H-shaped mark(s) with a stroke cut through"
     else:
@@ -194,67 +226,95 @@ def process_frame(
     return _nothing(timings, t_start, reason)
 
 
-def _fit_pose(reference: Reference, smooth: np.ndarray, cam: Camera, corners: np.ndarray):
-    """The camera's pose over the pad from the H's located corners, or None.
+def _whole_pad(H: np.ndarray, reference: Reference, smooth: np.ndarray) -> np.ndarray:
+    """The homography refitted on the edges of the whole pad, when they are found.
 
-    IPPE on the corners gives two candidate poses (a small pad seen nearly
-    head-on can be tilted either way). Each takes one step on the edges of the
-    H, the other marks and the board outline (``pipeline.edgefit``), and the
-    one whose edges fit better goes on to converge. When the two fit equally
-    well both go on, and if they still tie the one nearer to looking straight
-    down wins, as a hovering multirotor's camera does. The edge-refined pose
-    is kept when it still puts the H where the frame shows it; otherwise (the
-    rest of the pad is off the frame, hidden, or differs from the reference
-    picture; the H is too small for the pose's edge samples) the corners
-    alone decide. Returns the fit and the share of the whole pad's edges found.
+    The H alone pins the plane's tilt poorly: its corners, a few tens of pixels
+    apart, leave a degree of tilt to a tenth of a pixel. The pad's other marks
+    (a ring, a rim, bars) lie farther out; seen from the H's homography they may
+    be several pixels off, so they are searched for widely first. Kept when
+    most of the marks' edges are found and it still puts the H where it was.
+    An H over ``SELF_SUFFICIENT_PX`` pins the pose by itself.
     """
-    model = reference.edge_model
+    model = reference.marks_model
+    span = float(np.ptp(apply_h(H, reference.corners_m), axis=0).max())
+    if model is None or span > SELF_SUFFICIENT_PX:
+        return H
     img = smooth.astype(np.float32)
-    starts = ippe_candidates(reference.corners_m, corners, cam)
-    if not starts:
-        return None
-    tolerance = max(1.0, 0.03 * float(np.ptp(corners, axis=0).max()))
-    fits = []
-    for rvec0, tvec0 in starts:
-        fit = fit_edges(img, model, cam, rvec0, tvec0, iterations=1)
-        if fit is not None:
-            fits.append(fit)
-    fits.sort(key=lambda f: f.rms_px)
-    if len(fits) > 1 and fits[0].rms_px < AMBIGUOUS_FIT * fits[1].rms_px:
-        fits = fits[:1]
+    fit = fit_homography(
+        img, reference.edge_model, H, iterations=3, search_px=WIDE_SEARCH_PX, sides_alike=False
+    )
+    if fit is None or edge_share(img, model, fit.H, MARK_SIDE_PX) < MIN_MARKS_FOUND:
+        return H
+    moved = apply_h(fit.H, reference.corners_m) - apply_h(H, reference.corners_m)
+    if np.max(np.hypot(moved[:, 0], moved[:, 1])) > max(1.0, 0.03 * span):
+        return H
+    return fit.H
+
+
+def _heading(H: np.ndarray, reference: Reference, smooth: np.ndarray) -> np.ndarray:
+    """The homography (pad metres -> pixels) for the pad's heading.
+
+    The H alone looks the same after a half turn; on a pad whose other marks
+    do not (a triangle, stars above the H), the turn under which more of the
+    marks' edges are found is the pad's.
+    """
+    model = reference.marks_model
+    if reference.symmetric or model is None:
+        return H
+    img = smooth.astype(np.float32)
+    turned = H @ _HALF_TURN
+    return turned if edge_share(img, model, turned) > edge_share(img, model, H) else H
+
+
+def _fit_pose(
+    reference: Reference, smooth: np.ndarray, cam: Camera, H: np.ndarray, *, polish: bool
+):
+    """The camera's pose over the pad from the located homography, or None.
+
+    The homography already holds every edge of the pad that was found; the
+    pose is the rigid motion that maps the pad's points (the H's corners and
+    the marks' vertices) where it does, by IPPE. A small pad seen nearly head
+    on fits two poses almost equally, tilted either way: unless one fits
+    clearly better, the one nearer to looking straight down wins, as a
+    hovering multirotor's camera does. IPPE works from the homography's local
+    Jacobian; a few Levenberg-Marquardt steps on all the points take a tenth
+    of a pixel off, which on a small pad is a few percent of range. With the
+    pad's other marks found (``polish``), the pose then takes a few steps on all
+    the pad's edges with the camera model, whose 6 unknowns noise moves less
+    than the homography's 8; kept when it finds at least as many of the edges.
+    Returns the fit and the share of the whole pad's edges found where the pose
+    puts them.
+    """
+    pts_m = reference.pose_points_m
+    px = apply_h(H, pts_m)
+    obj = np.column_stack([pts_m, np.zeros(len(pts_m))])
     best = None
-    for start in fits:
-        fit = fit_edges(img, model, cam, start.rvec, start.tvec, iterations=2, search_px=1.5)
-        if fit is None:
-            continue
-        moved = project(reference.corners_m, fit.rvec, fit.tvec, cam) - corners
-        if np.max(np.hypot(moved[:, 0], moved[:, 1])) > tolerance:
-            continue
-        cand = (fit.rms_px, tilt_deg(fit.rvec), fit)
+    for rvec0, tvec0 in ippe_candidates(pts_m, px, cam):
+        rvec, tvec = cv2.solvePnPRefineLM(obj, px, cam.K, cam.dist, rvec0.copy(), tvec0.copy())
+        err = project(pts_m, rvec, tvec, cam) - px
+        rms = float(np.sqrt(np.mean(np.sum(err**2, axis=1))))
+        cand = (rms, tilt_deg(rvec), EdgeFit(rvec, tvec, rms, len(pts_m), 0))
         if best is None or _better(cand, best):
             best = cand
     if best is None:
-        best = min(
-            (_corner_fit(reference.corners_m, corners, cam, r, t) for r, t in starts),
-            key=_corner_rank,
-        )
+        return None
     fit = best[2]
-    return fit, edge_support(img, model, cam, fit.rvec, fit.tvec)
-
-
-def _corner_fit(corners_m: np.ndarray, corners: np.ndarray, cam: Camera, rvec, tvec):
-    rms = float(np.sqrt(np.mean(np.sum((project(corners_m, rvec, tvec, cam) - corners) ** 2, 1))))
-    return (rms, tilt_deg(rvec), EdgeFit(rvec, tvec, rms, len(corners_m), len(corners_m)))
-
-
-def _corner_rank(cand) -> tuple[float, float]:
-    # Both of IPPE's poses usually fit 12 corners to a fraction of a pixel:
-    # within that, the camera nearer to looking straight down.
-    return (round(cand[0] / 0.25), cand[1])
+    img = smooth.astype(np.float32)
+    support = edge_support(img, reference.edge_model, cam, fit.rvec, fit.tvec)
+    if polish:
+        refined = fit_edges(img, reference.edge_model, cam, fit.rvec, fit.tvec, search_px=1.5)
+        if refined is not None:
+            better = edge_support(img, reference.edge_model, cam, refined.rvec, refined.tvec)
+            if better >= support:  # a drift along a flat valley finds fewer edges
+                fit, support = refined, better
+    return fit, support
 
 
 def _better(a, b) -> bool:
-    if min(a[0], b[0]) > AMBIGUOUS_FIT * max(a[0], b[0]):
+    """(rms, tilt, fit) a before b: the better fit, or on a tie (both within a
+    tenth of a pixel, or within AMBIGUOUS_FIT of each other) the smaller tilt."""
+    if max(a[0], b[0]) < 0.1 or min(a[0], b[0]) > AMBIGUOUS_FIT * max(a[0], b[0]):
         return a[1] < b[1]
     return a[0] < b[0]
 

@@ -58,8 +58,13 @@ def fit_h(mask: np.ndarray) -> HFit | None:
     >>> np.round(fit.corners[:4], 2).tolist(), round(fit.iou, 2)
     ([[19.5, 9.5], [39.5, 9.5], [39.5, 49.5], [99.5, 49.5]], 1.0)
     """
-    pts = cv2.findNonZero(mask)
-    if pts is None or len(pts) < 20:
+    contours, _ = cv2.findContours(
+        (mask > 0).astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE
+    )
+    if not contours:
+        return None
+    pts = max(contours, key=cv2.contourArea)
+    if len(pts) < 12:
         return None
     box = cv2.boxPoints(cv2.minAreaRect(pts))
     e1, e2 = box[1] - box[0], box[2] - box[1]

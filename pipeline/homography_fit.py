@@ -20,6 +20,8 @@ from pipeline.edgefit import EdgeModel, edge_offsets, side_samples
 
 MIN_SIDE_PX = 1.0  # a stroke end of a small H may be 2 px: still measured
 DAMPING = 1e-3
+MIN_CLEARANCE_PX = 1.0  # closer parallel sides blur into one line: not used (a thin
+# stroke's two sides pull each other inward alike, so its middle stays right)
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,6 +51,7 @@ def fit_homography(
     *,
     iterations: int = 6,
     search_px: float = 2.5,
+    sides_alike: bool = True,
 ) -> HomographyFit | None:
     """Refine ``H0`` so that the model's sides lie on the edges of ``image``.
 
@@ -59,7 +62,9 @@ def fit_homography(
     H0 : starting homography, pad metres -> pixels (an affine guess will do).
     iterations : Gauss-Newton steps at most.
     search_px : how far across each side the first step looks for its edge;
-        later steps look within 1.5 px.
+        each later step looks half as far, down to 1.5 px.
+    sides_alike : weigh every side alike however many samples it has (for
+        the H alone, whose stroke ends pin its height), or every sample alike.
 
     Examples
     --------
@@ -93,8 +98,8 @@ def fit_homography(
     fitted = None
     for it in range(iterations):
         H = np.linalg.inv(Tp) @ _h_matrix(h) @ Tm
-        search = search_px if it == 0 else min(search_px, 1.5)
-        samples = _samples(model, H, 1.5)
+        search = max(1.5, search_px / 2**it)  # wide first, then within 1.5 px
+        samples = _samples(model, H, MIN_CLEARANCE_PX)
         if samples is None:
             return None
         pts_m, normal, side = samples
@@ -112,8 +117,9 @@ def fit_homography(
             return None
         # Every side counts alike, however long: a stroke's end, a few pixels
         # wide, is all that pins the H's height.
-        per_side = np.bincount(sid, minlength=len(model.a_m))[sid]
-        w = np.where(np.abs(r) <= 0.5, 1.0, 0.5 / np.maximum(np.abs(r), 1e-9)) / per_side
+        w = np.where(np.abs(r) <= 0.5, 1.0, 0.5 / np.maximum(np.abs(r), 1e-9))
+        if sides_alike:
+            w = w / np.bincount(sid, minlength=len(model.a_m))[sid]
         JtW = J.T * w
         A = JtW @ J
         A += DAMPING * np.diag(np.diag(A)) + 1e-12 * np.eye(8)
@@ -123,7 +129,7 @@ def fit_homography(
             return None
         h = h + step
         fitted = float(np.sqrt(np.mean((r + J @ step) ** 2)))
-        if np.abs(step).max() < 1e-6:
+        if it > 0 and np.abs(step).max() < 0.05 * sp:  # under ~0.05 px anywhere on the H
             break
     if fitted is None:
         return None
@@ -132,13 +138,15 @@ def fit_homography(
     return HomographyFit(H, fitted, support(img, model, H))
 
 
-def support(image: np.ndarray, model: EdgeModel, H: np.ndarray) -> float:
+def support(
+    image: np.ndarray, model: EdgeModel, H: np.ndarray, min_side_px: float = MIN_SIDE_PX
+) -> float:
     """Mean over the model's visible sides of the share of samples that sit on an edge.
 
     Per side, so that a stroke's end, a few samples long, counts as much as a
     leg's side: an H stretched past its strokes' ends must not pass for found.
     """
-    samples = _samples(model, H, 0.0)
+    samples = _samples(model, H, MIN_CLEARANCE_PX, min_side_px)
     if samples is None:
         return 0.0
     pts_m, normal, side = samples
@@ -155,7 +163,9 @@ def support(image: np.ndarray, model: EdgeModel, H: np.ndarray) -> float:
     return float(np.mean(np.bincount(sides, hit)[present] / n[present]))
 
 
-def _samples(model: EdgeModel, H: np.ndarray, min_clearance_px: float):
+def _samples(
+    model: EdgeModel, H: np.ndarray, min_clearance_px: float, min_side_px: float = MIN_SIDE_PX
+):
     n = len(model.a_m)
     ends = apply_h(H, np.vstack([model.a_m, model.b_m]))
     if not np.all(np.isfinite(ends)):
@@ -164,7 +174,7 @@ def _samples(model: EdgeModel, H: np.ndarray, min_clearance_px: float):
     len_m = np.hypot(*(model.b_m - model.a_m).T)
     len_px = np.hypot(*(pb - pa).T)
     clearance_px = model.clearance_m * len_px / np.maximum(len_m, 1e-12)
-    return side_samples(model, pa, pb, clearance_px >= min_clearance_px, MIN_SIDE_PX)
+    return side_samples(model, pa, pb, clearance_px >= min_clearance_px, min_side_px)
 
 
 def _h_matrix(h: np.ndarray) -> np.ndarray:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from functools import cached_property
@@ -13,10 +14,10 @@ from pipeline.colour import Projection, contrast, learn_projection
 from pipeline.edgefit import EdgeModel
 from pipeline.edges import refine_polygon, surround_ratio
 from pipeline.hfit import HFit, fit_h
+from pipeline.marks import Mark, find_marks, symmetric_marks
 from pipeline.moments import shape_moments
 from pipeline.preprocess import check_image
 from pipeline.shape_match import ShapeMatcher
-from pipeline.shapes import corner_angles, polygon_corners, regions
 from pipeline.template import reference_pyramid
 
 H_CORNERS = 12
@@ -35,9 +36,10 @@ class Reference:
     outer edge. ``corners_m``: the H's 12 corners in the pad frame (origin at
     the pad centre, +x to the picture's right, +y to its top), in contour
     order, the order every detection reports: those of the block H under any
-    serifs. ``bars_m``: other straight-sided marks of the H's colour (the
-    seed's side bars), 4 corners each, used to refine the pose over the whole
-    pad. ``symmetric``: the pad looks the same after a 180 degree turn.
+    serifs. ``marks``: the pad's other edges (the seed's side bars, rings, a
+    disc's or a board's rim, stars: ``pipeline.marks``), which refine the pose
+    over the whole pad and tell an asymmetric pad's heading. ``symmetric``:
+    the pad looks the same after a 180 degree turn.
     ``projection``: the colour channel in which the H is bright and its board
     dark (frames are searched on it). ``contrast``: H minus board on that
     channel. ``leg_fraction``: the thinner leg's width over the H's width.
@@ -49,8 +51,7 @@ class Reference:
     mask: np.ndarray
     corners_px: np.ndarray
     corners_m: np.ndarray
-    bars_m: tuple[np.ndarray, ...]
-    outline_m: np.ndarray | None
+    marks: tuple[Mark, ...]
     hu: tuple[float, ...]
     orientation_deg: float
     eccentricity: float
@@ -65,11 +66,33 @@ class Reference:
 
     @cached_property
     def edge_model(self) -> EdgeModel:
-        """Every straight side of the pad: the H's, the bars' and the outline's."""
-        marks = [(self.corners_m, True)] + [(bar, True) for bar in self.bars_m]
-        if self.outline_m is not None:
-            marks.append((self.outline_m, False))
-        return EdgeModel.from_polygons(marks)
+        """Every side of the pad: the H's and its other marks'."""
+        polys = [(self.corners_m, True)] + [(m.corners_m, m.bright) for m in self.marks]
+        return EdgeModel.from_polygons(polys)
+
+    @cached_property
+    def marks_model(self) -> EdgeModel | None:
+        """The sides of the marks alone (None when the pad has none)."""
+        if not self.marks:
+            return None
+        return EdgeModel.from_polygons([(m.corners_m, m.bright) for m in self.marks])
+
+    @cached_property
+    def pose_points_m(self) -> np.ndarray:
+        """The pad's points a pose is fitted to: the H's corners and the marks' vertices."""
+        return np.vstack([self.corners_m, *(m.corners_m for m in self.marks)])
+
+    def is_paint(self, points_m: np.ndarray) -> np.ndarray:
+        """Whether the reference picture shows the H's paint (the H or a mark of its
+        colour) at each pad point (N x 2 metres); points off the picture are not."""
+        h, w = self.mask.shape
+        pts = np.asarray(points_m, np.float64).reshape(-1, 2)
+        u = np.round(pts[:, 0] * self.channel_px_per_m + w / 2.0 - 0.5).astype(int)
+        v = np.round(h / 2.0 - pts[:, 1] * self.channel_px_per_m - 0.5).astype(int)
+        inside = (u >= 0) & (u < w) & (v >= 0) & (v < h)
+        out = np.zeros(len(pts), bool)
+        out[inside] = self.mask[v[inside], u[inside]] > 0
+        return out
 
     @cached_property
     def h_edges(self) -> EdgeModel:
@@ -83,8 +106,13 @@ class Reference:
 
     @cached_property
     def template_pyramid(self) -> tuple[np.ndarray, ...]:
-        """The learned channel at halving resolutions, for comparing frames with it."""
-        return reference_pyramid(self.channel)
+        """The picture and its learned channel at halving resolutions, for comparing
+        frames with it."""
+        h, w = self.channel.shape[:2]
+        picture = self.image
+        if picture.shape[:2] != (h, w):
+            picture = cv2.resize(picture, (w, h), interpolation=cv2.INTER_AREA)
+        return reference_pyramid(picture, self.channel)
 
     @property
     def h_size_m(self) -> float:
@@ -143,21 +171,20 @@ class Reference:
                 f"the H barely stands out from its board (contrast {h_contrast:.0f} of 255): "
                 "take the picture in even light, straight from above"
             )
+        board_level = float(smooth[board_mask].mean())
+        level = 0.5 * (float(smooth[h_mask].mean()) + board_level)
+        mask = np.where(smooth > level, 255, 0).astype(np.uint8)
+        # The H was found at whichever threshold shaped it best; on the learned
+        # channel, half-way between the paint and the board is where its edges are.
+        fit = _refit(mask, region, fit)
         refined = refine_polygon(smooth, fit.corners)
         h_poly = refined[0] if refined is not None else fit.corners
-        level = 0.5 * (float(smooth[h_mask].mean()) + float(smooth[board_mask].mean()))
-        mask = np.where(smooth > level, 255, 0).astype(np.uint8)
-        area = float(wh * ww)
-        bars = _bars(mask, smooth, region, area)
         to_m = _pixels_to_metres(ww, wh, pad_size_m)
         corners_m = to_m(h_poly)
-        bars_m = tuple(to_m(b) for b in bars)
-        # The picture's edge is the board's outer edge when the board is dark
-        # there (on the learned channel); it then refines the pose over the
-        # pad's full width.
-        rim = np.concatenate([mask[0], mask[-1], mask[:, 0], mask[:, -1]])
-        outline = np.array([[-0.5, -0.5], [ww - 0.5, -0.5], [ww - 0.5, wh - 0.5], [-0.5, wh - 0.5]])
-        outline_m = to_m(outline) if np.mean(rim > 0) < 0.02 else None
+        marks = tuple(
+            Mark(to_m(poly), bright)
+            for poly, bright in find_marks(smooth, level, board_level, region)
+        )
         contour = _outer_contour(region)
         mom = shape_moments(contour)
         h_span_px = float(np.ptp(h_poly, axis=0).max())
@@ -173,13 +200,12 @@ class Reference:
             mask=mask,
             corners_px=corners_px,
             corners_m=corners_m,
-            bars_m=bars_m,
-            outline_m=outline_m,
+            marks=marks,
             hu=tuple(float(v) for v in mom.hu),
             orientation_deg=float(mom.orientation_deg),
             eccentricity=float(mom.eccentricity),
             solidity=float(np.count_nonzero(region) / hull) if hull > 0 else 0.0,
-            symmetric=_is_symmetric(corners_m, bars_m),
+            symmetric=symmetric_marks(corners_m, marks),
             surround_ratio=surround,
             projection=projection,
             contrast=h_contrast,
@@ -195,8 +221,7 @@ class Reference:
             "image_size": [int(self.image.shape[1]), int(self.image.shape[0])],
             "corners_m": self.corners_m.tolist(),
             "corners_px": self.corners_px.tolist(),
-            "bars_m": [b.tolist() for b in self.bars_m],
-            "outline_m": None if self.outline_m is None else self.outline_m.tolist(),
+            "marks": [m.to_dict() for m in self.marks],
             "hu": list(self.hu),
             "orientation_deg": self.orientation_deg,
             "eccentricity": self.eccentricity,
@@ -237,6 +262,7 @@ def _find_h(work: np.ndarray) -> tuple[HFit, np.ndarray] | str:
     centre = np.array([ww / 2.0, wh / 2.0])
     best: tuple[float, float, HFit, np.ndarray] | None = None
     shapes = 0
+    seen: set[tuple[int, int, int, int]] = set()
     for _name, chan in _channels(work):
         lo, hi = np.percentile(chan, [2, 98])
         if hi - lo < _MIN_CONTRAST:
@@ -252,6 +278,10 @@ def _find_h(work: np.ndarray) -> tuple[HFit, np.ndarray] | str:
                     continue  # the H lies inside the picture
                 if a > 0.95 * w * h:
                     continue  # a filled box
+                key = (x // 4, y // 4, w // 4, h // 4)
+                if key in seen:
+                    continue  # the same shape at another threshold or in another channel
+                seen.add(key)
                 shapes += 1
                 region = labels[y : y + h, x : x + w] == k
                 crop = np.zeros((h + 4, w + 4), np.uint8)
@@ -288,6 +318,25 @@ def _find_h(work: np.ndarray) -> tuple[HFit, np.ndarray] | str:
     return best[2], best[3]
 
 
+def _refit(mask: np.ndarray, region: np.ndarray, fit: HFit) -> HFit:
+    """The block H fitted again to the H's region of ``mask`` (the one that covers
+    most of the region first found), or the first fit when that fails."""
+    n, labels = cv2.connectedComponents((mask > 0).astype(np.uint8))
+    counts = np.bincount(labels[region], minlength=n)
+    counts[0] = 0
+    k = int(counts.argmax())
+    if counts[k] == 0:
+        return fit
+    ys, xs = np.nonzero(labels == k)
+    x0, y0 = xs.min(), ys.min()
+    crop = np.zeros((ys.max() - y0 + 5, xs.max() - x0 + 5), np.uint8)
+    crop[ys - y0 + 2, xs - x0 + 2] = 255
+    again = fit_h(crop)
+    if again is None:
+        return fit
+    return dataclasses.replace(again, corners=again.corners + np.array([x0 - 2, y0 - 2]))
+
+
 def _h_and_board(region: np.ndarray, fit: HFit) -> tuple[np.ndarray, np.ndarray]:
     """The H's inner pixels and the board's pixels right around it (and between its legs)."""
     leg = max(1.0, min(fit.leg_widths))
@@ -317,25 +366,6 @@ def _outer_contour(region: np.ndarray) -> np.ndarray:
     return c.reshape(-1, 2)[::-1].copy()
 
 
-def _bars(mask: np.ndarray, smooth: np.ndarray, h_region: np.ndarray, area: float):
-    """Straight-sided rectangles of the H's colour beside it (the seed's side bars)."""
-    out = []
-    for r in regions(mask, min_area=0.004 * area, max_area=0.6 * area):
-        if r.solidity < 0.93:
-            continue
-        cx, cy = np.round(r.contour.mean(axis=0)).astype(int)
-        if h_region[np.clip(cy, 0, mask.shape[0] - 1), np.clip(cx, 0, mask.shape[1] - 1)]:
-            continue
-        quad = polygon_corners(r.contour, 4)
-        if quad is None:
-            continue
-        ang = corner_angles(quad)
-        if np.all(np.abs(ang - 90.0) < 12.0):
-            rq = refine_polygon(smooth, quad)
-            out.append(rq[0] if rq is not None else quad)
-    return out
-
-
 def _pixels_to_metres(width: int, height: int, pad_size_m: float):
     m_per_px = pad_size_m / width
 
@@ -346,12 +376,3 @@ def _pixels_to_metres(width: int, height: int, pad_size_m: float):
         return np.column_stack([x, y])
 
     return convert
-
-
-def _is_symmetric(corners_m: np.ndarray, bars_m: tuple[np.ndarray, ...]) -> bool:
-    """Whether a 180 degree turn about the pad centre maps every corner onto one."""
-    tol = 0.03 * float(np.ptp(corners_m, axis=0).max())
-    pts = np.vstack([corners_m, *bars_m]) if bars_m else corners_m
-    turned = -pts
-    d = np.linalg.norm(turned[:, None, :] - pts[None, :, :], axis=2)
-    return bool(np.all(d.min(axis=1) < tol))

@@ -69,8 +69,9 @@ class ShapeMatcher:
         rasters = np.stack([_raster(base @ _rot(a).T) for a in angles]).reshape(STEPS, -1)
         return cls(mean, whiten, angles, rasters, rasters.sum(axis=1))
 
-    def match(self, contour_px: np.ndarray) -> ShapeMatch | None:
-        """Compare a region's boundary (N x 2 frame pixels) with the H."""
+    def match(self, contour_px: np.ndarray, min_iou: float = 0.0) -> ShapeMatch | None:
+        """Compare a region's boundary (N x 2 frame pixels) with the H; None when
+        the best overlap is under ``min_iou``."""
         pts = np.asarray(contour_px, np.float64).reshape(-1, 2)
         if len(pts) < 6:
             return None
@@ -82,6 +83,8 @@ class ShapeMatcher:
         inter = self.rasters @ cand
         iou = inter / np.maximum(self.areas + cand.sum() - inter, 1e-9)
         k = int(np.argmax(iou))
+        if iou[k] < min_iou:
+            return None
         angle = self.angles[k] + _peak_offset(iou, k) * (self.angles[1] - self.angles[0])
         # frame = mean + W_c^-1 R(angle) W_r F (m - mean_r)
         lin = np.linalg.inv(w) @ _rot(angle) @ self.whiten @ _FLIP
@@ -101,8 +104,12 @@ def _polygon_moments(poly: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _inv_sqrt(cov: np.ndarray) -> np.ndarray:
-    vals, vecs = np.linalg.eigh(cov)
-    return vecs @ np.diag(1.0 / np.sqrt(np.maximum(vals, 1e-12))) @ vecs.T
+    """The inverse square root of a 2 x 2 covariance, in closed form:
+    for s = sqrt(det) and t = sqrt(trace + 2 s), sqrt(C) = (C + s I) / t."""
+    s = np.sqrt(max(np.linalg.det(cov), 1e-24))
+    t = np.sqrt(cov[0, 0] + cov[1, 1] + 2.0 * s)
+    root = (cov + s * np.eye(2)) / t
+    return np.linalg.inv(root)
 
 
 def _rot(a: float) -> np.ndarray:

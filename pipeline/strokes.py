@@ -12,13 +12,16 @@ stroke widths than the pad in view still samples paint.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import cv2
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 
 from pipeline.homography_fit import apply_h
 
 STEP_PX = 1.0  # along each stroke's middle
-MAX_DIP = 0.2  # of the H's contrast: a deeper dip along a stroke's middle is a gap
+MAX_DIP = 0.35  # of the H's contrast: a deeper dip along a stroke's middle is a gap
 _ACROSS = np.linspace(-1.5, 1.5, 7)  # offsets across a stroke, in half stroke widths
 
 
@@ -37,14 +40,16 @@ def _strokes_m(corners_m: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, floa
 
 
 def stroke_samples(
-    corners_m: np.ndarray, H: np.ndarray, marks_m: tuple[np.ndarray, ...] = ()
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    corners_m: np.ndarray, H: np.ndarray, is_paint: Callable[[np.ndarray], np.ndarray]
+):
     """Where to sample the strokes and the board beside them, in frame pixels.
 
-    Returns (paint, side_a, side_b, a_ok, b_ok): ``paint`` (K x m x 2) holds K
-    points across each of m middle points; the sides lie a stroke-half past
-    the strokes' edges; ``a_ok``/``b_ok`` say which side points are board
-    (not on the H or another of the pad's marks).
+    ``is_paint``: which pad points (N x 2 metres) the reference shows painted.
+    Returns (paint, side_a, side_b, a_ok, b_ok, counts): ``paint`` (K x m x 2)
+    holds K points across each of m middle points; the sides lie a
+    stroke-half past the strokes' edges; ``a_ok``/``b_ok`` say which side
+    points are board (not on the H or another painted mark); ``counts``: middle
+    points per stroke.
     """
     across, side_a, side_b, counts = [], [], [], []
     for a, b, half in _strokes_m(corners_m):
@@ -67,15 +72,14 @@ def stroke_samples(
         side_b.append(mids - reach * normal)
     paint_m = np.concatenate(across, axis=1)
     sa, sb = np.concatenate(side_a), np.concatenate(side_b)
-    polys = (corners_m, *marks_m)
     k, m = paint_m.shape[:2]
     px = apply_h(H, np.vstack([paint_m.reshape(-1, 2), sa, sb]))
     return (
         px[: k * m].reshape(k, m, 2),
         px[k * m : k * m + m],
         px[k * m + m :],
-        ~_on_marks(sa, polys),
-        ~_on_marks(sb, polys),
+        ~is_paint(sa),
+        ~is_paint(sb),
         tuple(counts),
     )
 
@@ -105,20 +109,6 @@ def paint_and_board(
     return centre, np.where(np.isfinite(board), board, np.nan)
 
 
-def _on_marks(pts: np.ndarray, polygons: tuple[np.ndarray, ...]) -> np.ndarray:
-    """Whether each point lies inside any of the polygons (even-odd rule)."""
-    inside = np.zeros(len(pts), bool)
-    x, y = pts[:, 0:1], pts[:, 1:2]
-    for poly in polygons:
-        a = np.asarray(poly, np.float64)
-        b = np.roll(a, -1, axis=0)
-        crosses = (a[:, 1] > y) != (b[:, 1] > y)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            xc = a[:, 0] + (y - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
-        inside |= (np.count_nonzero(crosses & (x < xc), axis=1) % 2) == 1
-    return inside
-
-
 def deepest_dip(image: np.ndarray, weights, samples) -> float:
     """The deepest local dip along any stroke's middle, as a share of the H's
     contrast with the board beside it (0: solid strokes; ~1: a clean gap)."""
@@ -135,8 +125,9 @@ def deepest_dip(image: np.ndarray, weights, samples) -> float:
         c = centre[start : start + n]
         start += n
         w = max(2, n // 12)
-        for i in range(n):
-            left = c[max(0, i - w) : i + 1].max()
-            right = c[i : i + w + 1].max()
-            worst = max(worst, (min(left, right) - c[i]) / contrast)
+        # The brightest within w points before and after each point (itself included).
+        pad = np.full(w, -np.inf)
+        left = sliding_window_view(np.concatenate([pad, c]), w + 1).max(axis=1)
+        right = sliding_window_view(np.concatenate([c, pad]), w + 1).max(axis=1)
+        worst = max(worst, float(np.max(np.minimum(left, right) - c)) / contrast)
     return worst
