@@ -255,7 +255,7 @@ class Station:
 
     def _start_stand_in(self) -> None:
         # The stand-in is only started when the user named no vehicle (DESIGN.md).
-        from backend.sim.vehicle import SimConfig, SimVehicle, VehicleServer
+        from sim.vehicle import SimConfig, SimVehicle, VehicleServer
 
         s = self.settings
         config = SimConfig(
@@ -414,7 +414,7 @@ class Station:
         s = self.settings
         if s.camera.partition(":")[0].lower() != "sim":
             return open_source(s.camera)
-        from backend.camera.sim_source import SimCameraConfig
+        from sim.camera import SimCamera, SimCameraConfig
 
         cam = self.camera_model
         config = SimCameraConfig(
@@ -427,11 +427,11 @@ class Station:
             hfov_deg=cam.hfov_deg,
             seed=s.sim_seed,
         )
-        return open_source("sim", vehicle_pose=self.vehicle_pose, config=config)
+        return SimCamera(vehicle_pose=self.vehicle_pose, config=config)
 
     def vehicle_pose(self):
         """The vehicle's pose from telemetry (LOCAL_POSITION_NED + ATTITUDE), or ``None``."""
-        from backend.camera.sim_source import VehiclePose
+        from sim.camera import VehiclePose
 
         link = self.link
         if link is None:

@@ -1,6 +1,6 @@
 """From one vision pose to what guidance needs: the pad relative to the vehicle.
 
-Frames (as in ``backend.camera.sim_source``): local NED; body FRD with
+Frames (as in ``sim.camera``): local NED; body FRD with
 ``R_ned_body = Rz(yaw) Ry(pitch) Rx(roll)`` (MAVLink ATTITUDE); camera (OpenCV: x right,
 y down, z forward) with ``R_body_cam`` the mount; pad frame (x picture right, y picture
 top, z up) with ``Pose.position_m`` the camera centre and ``Pose.R_pad_cam``.

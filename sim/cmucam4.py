@@ -1,6 +1,6 @@
 """A CMUcam4 stand-in on a pseudo-terminal: the real byte protocol with its real timing.
 
-``python -m backend.sim.cmucam4 [--scale-time K] [--image PATH] [--fault ...]`` opens a pty
+``python -m sim.cmucam4 [--scale-time K] [--image PATH] [--fault ...]`` opens a pty
 pair, prints the device path (the slave end) on one line and serves the camera on the
 master end until interrupted. Point the driver (or any serial terminal) at that path.
 
@@ -154,7 +154,7 @@ def sim_frame_source(
     north: float, east: float, down: float, yaw_deg: float, *, snr_db: float | None = None
 ) -> Callable[[], np.ndarray]:
     """Frames of the simulated camera from a fixed vehicle pose (pad at the origin)."""
-    from backend.camera.sim_source import PadRenderer, SimCameraConfig, VehiclePose
+    from sim.camera import PadRenderer, SimCameraConfig, VehiclePose
 
     renderer = PadRenderer(SimCameraConfig(floor="textured", snr_db=snr_db))
 
@@ -727,7 +727,7 @@ def _number(word: str) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m backend.sim.cmucam4",
+        prog="python -m sim.cmucam4",
         description="Serve a CMUcam4 stand-in on a pseudo-terminal; prints the device path.",
     )
     parser.add_argument(

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from backend.link import bench
+from bench import link as bench
 
 
 def test_bench_reports_json(capsys) -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from backend.sim.vehicle.physics import Vec3
+from sim.vehicle.physics import Vec3
 
 
 @dataclass(frozen=True)

@@ -7,9 +7,9 @@ import math
 
 import pytest
 
-from backend.scenarios.__main__ import main
-from backend.scenarios.land import ON_PAD_M, PAD_NE, RunResult, RunSpec, summarize
-from backend.scenarios.lockstep import LockstepLink
+from bench.scenarios.__main__ import main
+from bench.scenarios.land import ON_PAD_M, PAD_NE, RunResult, RunSpec, summarize
+from bench.scenarios.lockstep import LockstepLink
 
 KEYS = {
     "strategy",
@@ -118,8 +118,8 @@ def test_mavlink_url_flies_any_vehicle_in_real_time():
     """``--mavlink``: the same mission against a vehicle that runs by itself (here the
     stand-in, free-running in real time, as ArduCopter SITL would), the camera rendered
     from telemetry, the touchdown measured from telemetry."""
-    from backend.scenarios.land import run_one
-    from backend.sim.vehicle import SimConfig, SimVehicle, VehicleServer
+    from bench.scenarios.land import run_one
+    from sim.vehicle import SimConfig, SimVehicle, VehicleServer
 
     spec = RunSpec(0, 5, "guided", 20.0, PAD_NE[0] + 1.0, 0.5, 3.5, 30.0, 1.0, 90.0, 0.2, 25.0)
     sim = SimVehicle(

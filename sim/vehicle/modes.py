@@ -9,17 +9,17 @@ from __future__ import annotations
 import math
 
 from backend.link.modes import COPTER_MODES
-from backend.sim.vehicle.control import (
+from sim.vehicle.control import (
     AttitudeController,
     PositionController,
     lean_from_accel,
     mix,
     wrap_pi,
 )
-from backend.sim.vehicle.params import ParamStore
-from backend.sim.vehicle.physics import GRAVITY, Airframe, QuadBody
-from backend.sim.vehicle.precland import PrecLand
-from backend.sim.vehicle.state import Estimate, GuidedTarget
+from sim.vehicle.params import ParamStore
+from sim.vehicle.physics import GRAVITY, Airframe, QuadBody
+from sim.vehicle.precland import PrecLand
+from sim.vehicle.state import Estimate, GuidedTarget
 
 # ArduCopter's mode numbers and names: the same table the GCS side knows
 # (8, 10, 12, 26 and 29 do not exist on a quad).

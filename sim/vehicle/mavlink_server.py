@@ -17,7 +17,7 @@ from collections.abc import Callable
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from backend.sim.vehicle.autopilot import (
+from sim.vehicle.autopilot import (
     ACCEPTED,
     DENIED,
     FAILED,
@@ -29,10 +29,10 @@ from backend.sim.vehicle.autopilot import (
     SimVehicle,
     VehicleTruth,
 )
-from backend.sim.vehicle.params import ParamInfo
-from backend.sim.vehicle.precland import LandingTargetMsg
-from backend.sim.vehicle.telemetry import STREAM_GROUPS, TelemetryBuilder
-from backend.sim.vehicle.transport import Transport, make_transport
+from sim.vehicle.params import ParamInfo
+from sim.vehicle.precland import LandingTargetMsg
+from sim.vehicle.telemetry import STREAM_GROUPS, TelemetryBuilder
+from sim.vehicle.transport import Transport, make_transport
 
 log = logging.getLogger(__name__)
 

@@ -1,6 +1,6 @@
 """Camera benchmarks; prints one JSON object.
 
-``python -m backend.camera.bench --json [--quick]``
+``python -m bench.camera --json [--quick]``
 
 - ``sf``: ``SF`` snapshots from the CMUcam4 stand-in at real timing (time scale 1) over a
   pty, against the link's limit (25,000 bytes/s at 250,000 baud) and the spec's expected
@@ -26,13 +26,13 @@ import numpy as np
 
 from backend.camera.cmucam4 import CMUcam4, sf_seconds
 from backend.camera.opencv_source import OpenCVSource
-from backend.camera.sim_source import PadRenderer, SimCamera, SimCameraConfig, VehiclePose
+from sim.camera import PadRenderer, SimCamera, SimCameraConfig, VehiclePose
 
 LINK_BYTES_PER_S = 250000 / 10
 
 
 def bench_sf(sizes: list[tuple[int, int]], time_scale: float) -> list[dict]:
-    from backend.sim.cmucam4 import CMUcam4Board  # the bench, like tests, uses the stand-in
+    from sim.cmucam4 import CMUcam4Board  # the bench, like tests, uses the stand-in
 
     img = np.random.default_rng(0).integers(0, 256, (480, 640, 3), dtype=np.uint8)
     out = []
@@ -126,7 +126,7 @@ def bench_sim(frames: int) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m backend.camera.bench")
+    parser = argparse.ArgumentParser(prog="python -m bench.camera")
     parser.add_argument("--json", action="store_true", help="print JSON (the only output)")
     parser.add_argument("--quick", action="store_true", help="skip the paced SF runs (about 15 s)")
     parser.add_argument("--frames", type=int, default=100)

@@ -1,4 +1,4 @@
-"""``python -m backend.sim.vehicle``: run the ArduCopter stand-in until SIGINT/SIGTERM."""
+"""``python -m sim.vehicle``: run the ArduCopter stand-in until SIGINT/SIGTERM."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ import signal
 import sys
 import threading
 
-from backend.sim.vehicle.autopilot import SimVehicle
-from backend.sim.vehicle.config import SimConfig
-from backend.sim.vehicle.mavlink_server import VehicleServer
+from sim.vehicle.autopilot import SimVehicle
+from sim.vehicle.config import SimConfig
+from sim.vehicle.mavlink_server import VehicleServer
 
 
 def _floats(text: str, count: int, name: str) -> list[float]:
@@ -25,7 +25,7 @@ def _floats(text: str, count: int, name: str) -> list[float]:
 def build_parser() -> argparse.ArgumentParser:
     """The command-line interface."""
     p = argparse.ArgumentParser(
-        prog="python -m backend.sim.vehicle",
+        prog="python -m sim.vehicle",
         description="Simulated ArduCopter speaking MAVLink 2 (a stand-in for ArduPilot SITL).",
     )
     p.add_argument(

@@ -11,13 +11,13 @@ from collections import deque
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from backend.sim.vehicle.config import SimConfig
-from backend.sim.vehicle.control import (
+from sim.vehicle.config import SimConfig
+from sim.vehicle.control import (
     AttitudeController,
     PositionController,
     wrap_pi,
 )
-from backend.sim.vehicle.modes import (
+from sim.vehicle.modes import (
     ALT_HOLD,
     ARMABLE_MODES,
     GUIDED,
@@ -32,8 +32,8 @@ from backend.sim.vehicle.modes import (
     STABILIZE,
     FlightModes,
 )
-from backend.sim.vehicle.params import ParamInfo, ParamStore
-from backend.sim.vehicle.physics import (
+from sim.vehicle.params import ParamInfo, ParamStore
+from sim.vehicle.physics import (
     GRAVITY,
     Airframe,
     QuadBody,
@@ -42,8 +42,8 @@ from backend.sim.vehicle.physics import (
     Wind,
     euler_from_quat,
 )
-from backend.sim.vehicle.precland import LandingTargetMsg, PrecLand
-from backend.sim.vehicle.state import Estimate, GuidedTarget, VehicleTruth
+from sim.vehicle.precland import LandingTargetMsg, PrecLand
+from sim.vehicle.state import Estimate, GuidedTarget, VehicleTruth
 
 ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
 FAILED = mavlink.MAV_RESULT_FAILED

@@ -17,8 +17,8 @@ import pytest
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from backend.sim.vehicle import SimConfig, SimVehicle, VehicleServer
-from backend.sim.vehicle.physics import ned_to_body
+from sim.vehicle import SimConfig, SimVehicle, VehicleServer
+from sim.vehicle.physics import ned_to_body
 
 GUIDED, LOITER, RTL, LAND = 4, 5, 6, 9
 CUSTOM = mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED

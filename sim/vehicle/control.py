@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 
-from backend.sim.vehicle.physics import (
+from sim.vehicle.physics import (
     GRAVITY,
     MOTORS,
     Airframe,

@@ -13,10 +13,10 @@ import pytest
 import serial
 
 from backend.camera.rgb565 import encode_rgb565
-from backend.sim.cmucam4 import CMUcam4Board, Faults
+from sim.cmucam4 import CMUcam4Board, Faults
 
 pytestmark = [pytest.mark.timeout(30), pytest.mark.usefixtures("no_leftover_threads")]
-ROOT = Path(__file__).resolve().parents[3]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture
@@ -223,7 +223,7 @@ def test_cli_serves_on_a_pty(tmp_path) -> None:
 
     cv2.imwrite(str(img), np.full((60, 80, 3), 77, np.uint8))
     proc = subprocess.Popen(
-        [sys.executable, "-m", "backend.sim.cmucam4", "--scale-time", "0.02", "--image", str(img)],
+        [sys.executable, "-m", "sim.cmucam4", "--scale-time", "0.02", "--image", str(img)],
         cwd=ROOT,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
@@ -245,7 +245,7 @@ def test_cli_serves_on_a_pty(tmp_path) -> None:
 
 def test_cli_rejects_bad_fault() -> None:
     res = subprocess.run(
-        [sys.executable, "-m", "backend.sim.cmucam4", "--fault", "boom"],
+        [sys.executable, "-m", "sim.cmucam4", "--fault", "boom"],
         cwd=ROOT,
         capture_output=True,
         text=True,

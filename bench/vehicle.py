@@ -1,6 +1,6 @@
 """Benchmark of the stand-in: speed of the simulation and precision-landing accuracy.
 
-``python -m backend.sim.vehicle.bench [--seed N] [--json]`` prints one JSON object:
+``python -m bench.vehicle [--seed N] [--json]`` prints one JSON object:
 physics steps per second, how much faster than real time the bare sim and a lockstep
 MAVLink server with typical telemetry run, and the touchdown error of a precision
 landing (truth-fed LANDING_TARGET at 10 Hz over real TCP) in calm air and in wind.
@@ -17,10 +17,10 @@ import time
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from backend.sim.vehicle.autopilot import SimVehicle
-from backend.sim.vehicle.config import SimConfig
-from backend.sim.vehicle.mavlink_server import VehicleServer
-from backend.sim.vehicle.physics import ned_to_body
+from sim.vehicle.autopilot import SimVehicle
+from sim.vehicle.config import SimConfig
+from sim.vehicle.mavlink_server import VehicleServer
+from sim.vehicle.physics import ned_to_body
 
 
 def bare_speed(seed: int, sim_seconds: float = 20.0) -> dict[str, float]:
@@ -139,7 +139,7 @@ def precision_landing(seed: int, wind: float, gusts: float) -> dict[str, float]:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the benchmark and print JSON."""
-    p = argparse.ArgumentParser(prog="python -m backend.sim.vehicle.bench")
+    p = argparse.ArgumentParser(prog="python -m bench.vehicle")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--json", action="store_true", help="(the output is always JSON)")
     args = p.parse_args(argv)

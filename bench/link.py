@@ -1,6 +1,6 @@
 """Benchmark of the vehicle link over loopback TCP; prints one JSON object.
 
-``python -m backend.link.bench [--messages 20000] [--commands 200] [--latency-samples 250]``
+``python -m bench.link [--messages 20000] [--commands 200] [--latency-samples 250]``
 
 A bench vehicle (a thread with a listening socket, real MAVLink 2 bytes) sends vehicle
 HEARTBEATs, answers every COMMAND_LONG with an immediate COMMAND_ACK, and on request
@@ -158,7 +158,7 @@ def run(messages: int, commands: int, latency_samples: int = 250) -> dict[str, A
 
 def main(argv: list[str] | None = None) -> int:
     """Command-line entry: print the measurements as JSON."""
-    parser = argparse.ArgumentParser(prog="python -m backend.link.bench", description=__doc__)
+    parser = argparse.ArgumentParser(prog="python -m bench.link", description=__doc__)
     parser.add_argument("--messages", type=int, default=20000, help="ATTITUDE burst size")
     parser.add_argument("--commands", type=int, default=200, help="set_mode round trips")
     parser.add_argument(

@@ -1,4 +1,4 @@
-"""`python -m backend.sim.vehicle` as a real process: announces, serves, exits on signals."""
+"""`python -m sim.vehicle` as a real process: announces, serves, exits on signals."""
 
 from __future__ import annotations
 
@@ -12,12 +12,12 @@ from pathlib import Path
 import pytest
 from pymavlink import mavutil
 
-ROOT = Path(__file__).resolve().parents[3]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _start(*args: str) -> subprocess.Popen[str]:
     return subprocess.Popen(
-        [sys.executable, "-m", "backend.sim.vehicle", *args],
+        [sys.executable, "-m", "sim.vehicle", *args],
         cwd=ROOT,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,

@@ -23,7 +23,6 @@ from typing import Any
 
 import cv2
 
-from backend.camera.sim_source import PadRenderer, SimCameraConfig, VehiclePose
 from backend.link import DEFAULT_STREAM_RATES_HZ, LinkState, VehicleLink
 from backend.missions import (
     LandConfig,
@@ -36,6 +35,7 @@ from backend.missions import (
 from backend.missions.geometry import camera_yaw_hint, heading_error_deg
 from pipeline import Reference, process_frame
 from pipeline.render import make_pad_image
+from sim.camera import PadRenderer, SimCameraConfig, VehiclePose
 
 PAD_SIZE_M = 0.55
 #: Where the pad is, from home (the seed flew 6 m out).
@@ -131,8 +131,8 @@ class LockstepDriver:
     deterministic = True
 
     def __init__(self, spec: RunSpec) -> None:
-        from backend.scenarios.lockstep import LockstepLink
-        from backend.sim.vehicle import SimConfig, SimVehicle, VehicleServer
+        from bench.scenarios.lockstep import LockstepLink
+        from sim.vehicle import SimConfig, SimVehicle, VehicleServer
 
         self.sim = SimVehicle(
             SimConfig(

@@ -8,8 +8,8 @@ from collections.abc import Callable
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from backend.sim.vehicle.autopilot import SimVehicle
-from backend.sim.vehicle.physics import quat_from_euler
+from sim.vehicle.autopilot import SimVehicle
+from sim.vehicle.physics import quat_from_euler
 
 MAVLinkMessage = mavlink.MAVLink_message
 

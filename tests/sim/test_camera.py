@@ -10,8 +10,8 @@ import cv2
 import numpy as np
 import pytest
 
-from backend.camera import open_source
-from backend.camera.sim_source import (
+from pipeline.render import camera_rotation, make_pad_image
+from sim.camera import (
     DOWN_MOUNT,
     PadRenderer,
     SimCamera,
@@ -21,7 +21,6 @@ from backend.camera.sim_source import (
     rot_ned_body,
     rot_ned_pad,
 )
-from pipeline.render import camera_rotation, make_pad_image
 
 pytestmark = [pytest.mark.timeout(30), pytest.mark.usefixtures("no_leftover_threads")]
 
@@ -221,7 +220,7 @@ def test_source_streams_with_latency_and_stalls_without_telemetry() -> None:
     feed = PoseFeed()
     feed.set(pose())
     cfg = SimCameraConfig(floor="plain", width=320, height=240, rate_hz=30, latency_s=0.1)
-    src = open_source("sim", vehicle_pose=feed, config=cfg, stall_after=0.4)
+    src = SimCamera(vehicle_pose=feed, config=cfg, stall_after=0.4)
     try:
         src.start()
         f = src.wait_frame(-1, timeout=5.0)

@@ -2,21 +2,21 @@
 
 In-process use::
 
-    from backend.sim.vehicle import SimConfig, SimVehicle, VehicleServer
+    from sim.vehicle import SimConfig, SimVehicle, VehicleServer
 
     server = VehicleServer(SimVehicle(SimConfig(seed=1)), "tcp:127.0.0.1:5760")
     server.start()  # returns once it listens; server.address says where
     ...
     server.stop()
 
-Command line: ``python -m backend.sim.vehicle --mavlink tcp:127.0.0.1:5760``.
+Command line: ``python -m sim.vehicle --mavlink tcp:127.0.0.1:5760``.
 """
 
-from backend.sim.vehicle.autopilot import MODE_NAMES, Estimate, SimVehicle, VehicleTruth
-from backend.sim.vehicle.config import SimConfig
-from backend.sim.vehicle.mavlink_server import VehicleServer
-from backend.sim.vehicle.params import ParamInfo, ParamStore
-from backend.sim.vehicle.precland import LandingTargetMsg
+from sim.vehicle.autopilot import MODE_NAMES, Estimate, SimVehicle, VehicleTruth
+from sim.vehicle.config import SimConfig
+from sim.vehicle.mavlink_server import VehicleServer
+from sim.vehicle.params import ParamInfo, ParamStore
+from sim.vehicle.precland import LandingTargetMsg
 
 __all__ = [
     "MODE_NAMES",

@@ -1,4 +1,4 @@
-"""``python -m backend.scenarios land --runs 20 --seed 1 [--strategy plnd|guided] [--wind 3]
+"""``python -m bench.scenarios land --runs 20 --seed 1 [--strategy plnd|guided] [--wind 3]
 [--json] [--mavlink URL]``: land many times, print one JSON summary.
 
 Without ``--mavlink`` each run is the in-process stand-in in lockstep (deterministic for
@@ -14,11 +14,11 @@ import json
 import sys
 
 from backend.missions import STRATEGIES
-from backend.scenarios.land import RunSpec, run_one, summarize
+from bench.scenarios.land import RunSpec, run_one, summarize
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m backend.scenarios")
+    p = argparse.ArgumentParser(prog="python -m bench.scenarios")
     sub = p.add_subparsers(dest="scenario", required=True)
     land = sub.add_parser("land", help="land on the pad by vision, many times")
     land.add_argument("--runs", type=int, default=20, help="how many runs (default 20)")

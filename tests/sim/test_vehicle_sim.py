@@ -6,9 +6,9 @@ import math
 
 import pytest
 
-from backend.sim.vehicle import LandingTargetMsg, ParamStore, SimConfig, SimVehicle
-from backend.sim.vehicle.control import mix, sqrt_controller
-from backend.sim.vehicle.physics import Airframe, euler_from_quat, ned_to_body, quat_from_euler
+from sim.vehicle import LandingTargetMsg, ParamStore, SimConfig, SimVehicle
+from sim.vehicle.control import mix, sqrt_controller
+from sim.vehicle.physics import Airframe, euler_from_quat, ned_to_body, quat_from_euler
 
 GUIDED, LOITER, LAND = 4, 5, 9
 

@@ -18,7 +18,7 @@ import math
 from collections import deque
 from dataclasses import dataclass
 
-from backend.sim.vehicle.physics import Quat, Vec3, body_to_ned
+from sim.vehicle.physics import Quat, Vec3, body_to_ned
 
 MEAS_STALE_S = 1.0
 TARGET_TIMEOUT_S = 2.0
