@@ -37,15 +37,15 @@ chromium:
 run: install
 	$(BIN)/python -m backend serve
 
-test: install chromium
-	$(BIN)/ruff check .
-	$(BIN)/ruff format --check .
+test: install chromium lint
 	cd frontend && npm test --silent
 	$(BIN)/pytest
 
+# Style, the import contracts (pyproject.toml [tool.importlinter]) and the types.
 lint: $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
+	$(BIN)/lint-imports --no-logo
 
 format: $(STAMP)
 	$(BIN)/ruff check --fix .
@@ -55,4 +55,4 @@ bench: install
 	$(BIN)/python -m pipeline.bench --frames 200 --seed 0
 
 clean:
-	rm -rf $(VENV) out .pytest_cache .ruff_cache frontend/node_modules frontend/dist
+	rm -rf $(VENV) out .pytest_cache .ruff_cache .mypy_cache .import_linter_cache frontend/node_modules frontend/dist
