@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import viser.transforms as tf
 
-from backend.station import camera_yaw_in_pad
+from backend.frames import camera_yaw_in_pad
 from backend.viewer3d import (
     R_BODY_CAM,
     Viewer3D,
