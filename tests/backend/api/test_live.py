@@ -21,6 +21,13 @@ from pymavlink import mavutil
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
+from backend.api.messages import (
+    BinaryFrameHeader,
+    FrameMessage,
+    HelloMessage,
+    StatusMessage,
+    TelemetryMessage,
+)
 from backend.encoder import unpack_binary
 from tests.backend.api.support import AUTH, LiveServer, make_settings, wait_for
 
@@ -107,19 +114,24 @@ def test_ws_hello_telemetry_frames_and_jpeg(live):
     with connect(live.ws_url, open_timeout=5) as ws:
         hello = json.loads(ws.recv(timeout=5))
         assert hello["type"] == "hello" and hello["telemetry"]["state"] == "up"
+        HelloMessage.model_validate(hello)  # every message holds to the typed contract
         telemetry = recv_until(ws, lambda m: isinstance(m, dict) and m["type"] == "telemetry")
         assert "armed" in telemetry
+        TelemetryMessage.model_validate(telemetry)
         frame = recv_until(ws, lambda m: isinstance(m, dict) and m["type"] == "frame")
+        FrameMessage.model_validate(frame)
         assert set(frame["overlay"]) == {"reference_corners", "axes", "target"}
         assert frame["width"] == 640 and frame["height"] == 480
         assert {"detected", "corners_px", "hu", "pose"} <= set(frame["result"])
         binary = recv_until(ws, lambda m: isinstance(m, bytes))
         header, jpeg = unpack_binary(binary)
+        BinaryFrameHeader.model_validate(header)
         assert header["kind"] == "camera" and header["seq"] >= frame["seq"]
         image = cv2.imdecode(np.frombuffer(jpeg, np.uint8), cv2.IMREAD_COLOR)
         assert image.shape == (header["height"], header["width"], 3)
         status = recv_until(ws, lambda m: isinstance(m, dict) and m["type"] == "status")
         assert status["pipeline"]["processed"] > 0
+        StatusMessage.model_validate(status)
 
 
 def test_ws_threshold_frames_only_when_asked(live):
