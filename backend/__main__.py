@@ -126,7 +126,7 @@ def main(argv: list[str] | None = None) -> int:
 
     import uvicorn
 
-    from backend.app import create_app
+    from backend.app import SERVER_OPTIONS, create_app
     from backend.viewer3d import browsable_host
 
     logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
@@ -147,7 +147,13 @@ def main(argv: list[str] | None = None) -> int:
             "commands still need the token"
         )
     print("\n".join(lines), flush=True)
-    uvicorn.run(app, host=settings.host, port=settings.port, log_level=args.log_level)
+    uvicorn.run(
+        app,
+        host=settings.host,
+        port=settings.port,
+        log_level=args.log_level,
+        **SERVER_OPTIONS,  # type: ignore[arg-type]
+    )
     return 0
 
 

@@ -33,6 +33,12 @@ from backend.station import VERSION, Station, build_station
 log = logging.getLogger(__name__)
 
 FRONTEND_DIST = Path(__file__).resolve().parent.parent / "frontend" / "dist"
+#: How uvicorn must serve the app (``python -m backend serve``, the tests, the benches).
+#: No per-message deflate on the WebSocket: its compressor is per connection, so every
+#: JPEG would be deflated once per viewer (for nothing: JPEG does not shrink) on the
+#: event loop, which then has no time left for the API.
+SERVER_OPTIONS: dict[str, object] = {"ws_per_message_deflate": False}
+
 # Multipart framing around the file: what an upload may carry beyond the file itself.
 _MULTIPART_SLACK = 64 * 1024
 

@@ -213,6 +213,7 @@ def run(viewers: int, hover_s: float, land_timeout_s: float) -> dict[str, Any]:
     import httpx
     import uvicorn
 
+    from backend import app as app_module
     from backend.app import create_app
     from backend.settings import Settings
 
@@ -230,7 +231,14 @@ def run(viewers: int, hover_s: float, land_timeout_s: float) -> dict[str, Any]:
     sock.bind(("127.0.0.1", 0))
     port = sock.getsockname()[1]
     server = uvicorn.Server(
-        uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning", lifespan="on")
+        uvicorn.Config(
+            app,
+            host="127.0.0.1",
+            port=port,
+            log_level="warning",
+            lifespan="on",
+            **getattr(app_module, "SERVER_OPTIONS", {}),
+        )
     )
     thread = threading.Thread(target=server.run, kwargs={"sockets": [sock]}, daemon=True)
     thread.start()
