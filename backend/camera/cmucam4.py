@@ -13,6 +13,10 @@ analog video out through a USB capture device, read with the OpenCV source (``op
 CLI::
 
     python -m backend.camera.cmucam4 /dev/ttyUSB0 --snapshot out.png [--res 160x120]
+
+Why one module of ~900 lines: it is one serial protocol, and the driver, its frame
+source and its CLI share the command and resynchronisation machinery; split, each
+part would reach into the others' internals.
 """
 
 from __future__ import annotations
