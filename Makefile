@@ -47,6 +47,7 @@ lint: $(STAMP) $(NODE_STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
 	$(BIN)/lint-imports --no-logo
+	$(BIN)/mypy
 	$(MAKE) --no-print-directory types-check
 
 # The dashboard's TypeScript types, generated from the server's OpenAPI document

@@ -136,7 +136,11 @@ def create_app(settings: Settings | None = None, *, station: Station | None = No
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         # Building and starting open sockets and threads (a second or so): off the loop.
-        running = station or await anyio.to_thread.run_sync(build_station, settings)
+        running: Station = (
+            station
+            if station is not None
+            else await anyio.to_thread.run_sync(build_station, settings)
+        )
         await anyio.to_thread.run_sync(running.start)
         app.state.station = running
         hub = Hub(running)

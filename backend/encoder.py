@@ -123,7 +123,8 @@ def reference_distance(processed: Processed) -> float | None:
     if not result.detected or not any(result.hu):
         return None
     with contextlib.suppress(Exception):
-        d = float(hu_distance(result.hu, processed.reference.hu, count=HU_COUNT))
+        hu = np.asarray(result.hu, float)
+        d = float(hu_distance(hu, np.asarray(processed.reference.hu, float), count=HU_COUNT))
         return d if math.isfinite(d) else None
     return None
 

@@ -240,7 +240,7 @@ def build_station(settings: Settings) -> Station:
         # status that shows it; a mission's live state moves the status on its own.
         events.before_each(status.refresh_now)
         missions.listen(lambda _snapshot: status.refresh())
-        references.listen(lambda _active: status.refresh_now())
+        references.listen(lambda _active: status.refresh())
         link.subscribe(_link_event_handler(events, flights))
         undo.pop_all()
     return Station(

@@ -22,6 +22,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -29,6 +30,9 @@ from backend.framebus import FrameBus
 from backend.frames import rot_ned_body, rot_ned_pad
 from backend.link import Telemetry
 from backend.vision_worker import Processed
+
+if TYPE_CHECKING:
+    import viser
 
 log = logging.getLogger(__name__)
 
@@ -92,8 +96,8 @@ class Viewer3D:
         self._aspect = float(aspect)
         self._trail: deque[np.ndarray] = deque(maxlen=trail_points)
         self._lock = threading.Lock()
-        self._server = None
-        self._h: dict = {}
+        self._server: viser.ViserServer | None = None
+        self._h: dict[str, Any] = {}
 
     @property
     def url(self) -> str:
@@ -151,9 +155,10 @@ class Viewer3D:
                 visible=False,
             )
 
-    def _add_pad(self):
+    def _add_pad(self) -> Any:
         image = self._pad_image[:, :, ::-1]  # viser wants RGB
         h, w = image.shape[:2]
+        assert self._server is not None  # called once the server runs
         return self._server.scene.add_image(
             "/pad",
             np.ascontiguousarray(image),

@@ -72,10 +72,11 @@ def bench_sf(sizes: list[tuple[int, int]], time_scale: float) -> list[dict]:
 def bench_opencv(frames: int) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "bench.avi"
-        writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 30.0, (640, 480))
+        fourcc = cv2.VideoWriter.fourcc(*"MJPG")
+        writer = cv2.VideoWriter(str(path), fourcc, 30.0, (640, 480))
         rng = np.random.default_rng(1)
         base = rng.integers(0, 256, (480, 640, 3), dtype=np.uint8)
-        base = cv2.GaussianBlur(base, (0, 0), 3)
+        base = np.asarray(cv2.GaussianBlur(base, (0, 0), 3), np.uint8)
         for i in range(frames):
             writer.write(np.roll(base, i * 4, axis=1))
         writer.release()
@@ -119,7 +120,8 @@ def bench_sim(frames: int) -> dict:
             raise RuntimeError("the simulated camera gave no frame")
         t0 = time.monotonic()
         time.sleep(2.0)
-        n = (src.latest().seq if src.latest() else first.seq) - first.seq
+        last = src.latest()
+        n = (last.seq if last is not None else first.seq) - first.seq
         result["source_fps_asked_200hz"] = round(n / (time.monotonic() - t0), 1)
     result["meets_15hz"] = result["render_noise_blur_fps"] >= 15
     return result

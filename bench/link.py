@@ -24,10 +24,12 @@ import socket
 import statistics
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from backend.link import Telemetry
 from backend.link.vehicle_link import VehicleLink
 
 
@@ -126,7 +128,7 @@ def run(messages: int, commands: int, latency_samples: int = 250) -> dict[str, A
             stamp = 10_000_000 + i
             sent = time.perf_counter()
             vehicle.send(_attitude(vehicle, stamp))
-            if link.wait_until(lambda t, s=stamp: t.attitude_time_boot_ms == s, 1.0):
+            if link.wait_until(_boot_ms_is(stamp), 1.0):
                 latencies.append((time.perf_counter() - sent) * 1e3)
             time.sleep(0.02)
         # command round trip
@@ -154,6 +156,11 @@ def run(messages: int, commands: int, latency_samples: int = 250) -> dict[str, A
         "crc_errors": crc_errors,
         "note": "cpu counts every thread of this process, the bench vehicle's included",
     }
+
+
+def _boot_ms_is(stamp: int) -> Callable[[Telemetry], bool]:
+    """Whether the snapshot holds the ATTITUDE stamped ``stamp``."""
+    return lambda t: t.attitude_time_boot_ms == stamp
 
 
 def main(argv: list[str] | None = None) -> int:

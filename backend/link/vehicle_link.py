@@ -110,13 +110,14 @@ class VehicleLink(LinkCommands, LinkReceiver, LinkHousekeeping):
         ):
             if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 255:
                 raise ValueError(f"{name} must be an int in 1..255, got {value!r}")
-        for name, value in (
+        timeouts: tuple[tuple[str, float], ...] = (
             ("heartbeat_timeout_s", heartbeat_timeout_s),
             ("command_timeout_s", command_timeout_s),
             ("connect_timeout_s", connect_timeout_s),
-        ):
-            if cmd.finite(value, name) <= 0:
-                raise ValueError(f"{name} must be > 0, got {value!r}")
+        )
+        for name, fvalue in timeouts:
+            if cmd.finite(fvalue, name) <= 0:
+                raise ValueError(f"{name} must be > 0, got {fvalue!r}")
         rates = streams.check_rates(
             DEFAULT_STREAM_RATES_HZ if stream_rates_hz is None else stream_rates_hz
         )

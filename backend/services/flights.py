@@ -44,7 +44,7 @@ class FlightService:
     def stop(self, reason: str = "operator") -> dict[str, Any] | None:
         return self._recorder.stop(reason)
 
-    def list(self) -> list[dict[str, Any]]:
+    def rows(self) -> list[dict[str, Any]]:
         """Every flight's row, newest first."""
         return self._storage.list_flights()
 

@@ -236,9 +236,10 @@ class ReferenceService:
 
 def _write_images(folder: Path, reference: Reference) -> None:
     image = reference.image
-    mask = ((np.asarray(reference.mask) > 0).astype(np.uint8)) * 255
+    mask = np.where(np.asarray(reference.mask) > 0, 255, 0).astype(np.uint8)
     if mask.shape[:2] != image.shape[:2]:
-        mask = cv2.resize(mask, (image.shape[1], image.shape[0]), interpolation=cv2.INTER_NEAREST)
+        size = (image.shape[1], image.shape[0])
+        mask = np.asarray(cv2.resize(mask, size, interpolation=cv2.INTER_NEAREST), np.uint8)
     for name, picture in (
         ("original", image),
         ("threshold", mask),

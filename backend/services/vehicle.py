@@ -6,6 +6,7 @@ Commands block the calling thread until the vehicle's COMMAND_ACK or a timeout
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 from backend.link import CommandResult, LinkState, Telemetry, VehicleLink
@@ -35,7 +36,7 @@ class VehicleService:
     def command(self, name: str, *args: Any) -> CommandResult:
         """Run one command of :data:`COMMANDS` (blocks until ACK or timeout)."""
         link = self.link
-        method = {
+        method: dict[str, Callable[..., CommandResult]] = {
             "arm": link.arm,
             "disarm": link.disarm,
             "force-disarm": link.force_disarm,
@@ -43,9 +44,8 @@ class VehicleService:
             "rtl": link.rtl,
             "takeoff": link.takeoff,
             "mode": link.set_mode,
-        }[name]
-        result: CommandResult = method(*args)
-        return result
+        }
+        return method[name](*args)
 
     def land_config(self, **changes: Any) -> LandConfig:
         """Mission settings for this station's pad (its place and heading from settings)."""

@@ -451,7 +451,7 @@ def _quantile(values: list[float], q: float) -> float:
 def summarize(strategy: str, results: list[RunResult]) -> dict[str, Any]:
     """The runner's JSON: exactly the keys the issue names (None where nothing landed)."""
     landed = [r for r in results if r.outcome == "landed" and r.touchdown_error_m is not None]
-    errs = [r.touchdown_error_m for r in landed]
+    errs = [r.touchdown_error_m for r in landed if r.touchdown_error_m is not None]
     heads = [r.heading_error_deg for r in landed if r.heading_error_deg is not None]
     times = [r.time_to_land_s for r in landed if r.time_to_land_s is not None]
 

@@ -38,7 +38,7 @@ def _not_found(exc: NoSuchFlight) -> HTTPException:
 
 @router.get("", dependencies=[Viewer], response_model=list[FlightSummary], responses=VIEWER_ERRORS)
 def list_flights(flights: FlightsDep) -> list[dict[str, Any]]:
-    return [_summary(r) for r in flights.list()]
+    return [_summary(r) for r in flights.rows()]
 
 
 @router.post("/start", dependencies=[Operator], response_model=FlightRef, responses=OPERATOR_ERRORS)
