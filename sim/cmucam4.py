@@ -23,6 +23,10 @@ What it emulates (``specs/cmucam4.md``, firmware v1.02):
 The picture comes from a still image or a callable returning BGR frames (the simulated
 camera), resized to the requested resolution. A callable that returns ``None`` makes the
 camera time out (``ERR: Camera Timeout Error``), as a real camera with no frame does.
+
+Why one module of ~800 lines: it is one board's firmware behaviour (its command table,
+its pacing and its faults act on the same state machine); it is test rig, not shipped
+station code.
 """
 
 from __future__ import annotations
