@@ -162,6 +162,7 @@ def process_frame(
             timings_ms=timings,
             contour_px=(region.contour.astype(np.float64) + 0.5) * back - 0.5,
             score=support,
+            mask=binary.mask,
         )
     if not ranked:
         reason = "no H-like shape in view"
@@ -173,7 +174,7 @@ def process_frame(
         reason = f"{unframed} H-shaped mark(s) without the pad's dark board around them"
     else:
         reason = f"{shapes} H-shaped mark(s), but no pad's edges around them"
-    return _nothing(timings, t_start, reason)
+    return _nothing(timings, t_start, reason, binary.mask)
 
 
 def rank_candidates(found: list[Region], reference: Reference) -> list[tuple[Region, tuple]]:
@@ -298,7 +299,9 @@ def _camera_for(camera: Camera, width: int, height: int) -> Camera:
     return camera.scaled(width, height)
 
 
-def _nothing(timings: dict[str, float], t_start: float, reason: str) -> FrameResult:
+def _nothing(
+    timings: dict[str, float], t_start: float, reason: str, mask: np.ndarray | None = None
+) -> FrameResult:
     timings["total"] = (time.perf_counter() - t_start) * 1e3
     nan = float("nan")
     return FrameResult(
@@ -310,6 +313,7 @@ def _nothing(timings: dict[str, float], t_start: float, reason: str) -> FrameRes
         pose=None,
         timings_ms=timings,
         reason=reason,
+        mask=mask,
     )
 
 
