@@ -205,6 +205,7 @@ def process_frame(
             timings_ms=timings,
             contour_px=(region.contour.astype(np.float64) + 0.5) * back - 0.5,
             score=support,
+            mask=binary.mask,
         )
     clock.lap("corners")
     if not found:
@@ -223,7 +224,7 @@ def process_frame(
         reason = f"{broken} H-shaped mark(s) with a stroke cut through"
     else:
         reason = f"{located} H-shaped mark(s), but no pad's edges around them"
-    return _nothing(timings, t_start, reason)
+    return _nothing(timings, t_start, reason, binary.mask)
 
 
 def _whole_pad(H: np.ndarray, reference: Reference, smooth: np.ndarray) -> np.ndarray:
@@ -330,7 +331,9 @@ def _camera_for(camera: Camera, width: int, height: int) -> Camera:
     return camera.scaled(width, height)
 
 
-def _nothing(timings: dict[str, float], t_start: float, reason: str) -> FrameResult:
+def _nothing(
+    timings: dict[str, float], t_start: float, reason: str, mask: np.ndarray | None = None
+) -> FrameResult:
     timings["total"] = (time.perf_counter() - t_start) * 1e3
     nan = float("nan")
     return FrameResult(
@@ -342,6 +345,7 @@ def _nothing(timings: dict[str, float], t_start: float, reason: str) -> FrameRes
         pose=None,
         timings_ms=timings,
         reason=reason,
+        mask=mask,
     )
 
 
