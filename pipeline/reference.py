@@ -12,7 +12,7 @@ import numpy as np
 
 from pipeline.colour import Projection, contrast, learn_projection
 from pipeline.edgefit import EdgeModel
-from pipeline.edges import refine_polygon, surround_ratio
+from pipeline.edges import refine_polygon
 from pipeline.hfit import HFit, fit_h
 from pipeline.marks import Mark, find_marks, symmetric_marks
 from pipeline.moments import shape_moments
@@ -57,7 +57,6 @@ class Reference:
     eccentricity: float
     solidity: float
     symmetric: bool
-    surround_ratio: float
     projection: Projection
     contrast: float
     leg_fraction: float
@@ -187,10 +186,6 @@ class Reference:
         )
         contour = _outer_contour(region)
         mom = shape_moments(contour)
-        h_span_px = float(np.ptp(h_poly, axis=0).max())
-        # How dark the pad is right around the H, relative to the H: frames must
-        # show the same (a look-alike painted on a floor does not).
-        surround = surround_ratio(smooth, h_poly, max(2.5, 0.03 * h_span_px))
         hull = cv2.contourArea(cv2.convexHull(contour.reshape(-1, 1, 2).astype(np.int32)))
         corners_px = (h_poly + 0.5) / scale - 0.5
         return cls(
@@ -206,7 +201,6 @@ class Reference:
             eccentricity=float(mom.eccentricity),
             solidity=float(np.count_nonzero(region) / hull) if hull > 0 else 0.0,
             symmetric=symmetric_marks(corners_m, marks),
-            surround_ratio=surround,
             projection=projection,
             contrast=h_contrast,
             leg_fraction=fit.leg_fraction,
@@ -227,7 +221,6 @@ class Reference:
             "eccentricity": self.eccentricity,
             "solidity": self.solidity,
             "symmetric": self.symmetric,
-            "surround_ratio": self.surround_ratio,
             "projection": self.projection.to_dict(),
             "contrast": self.contrast,
             "leg_fraction": self.leg_fraction,
