@@ -48,3 +48,15 @@ def camera_yaw_in_pad(pad_heading_deg: float, vehicle_yaw_rad: float) -> float:
     """
     yaw = float(pad_heading_deg) - math.degrees(float(vehicle_yaw_rad))
     return (yaw + 180.0) % 360.0 - 180.0
+
+
+def gravity_in_camera(roll: float, pitch: float, R_body_cam: np.ndarray) -> np.ndarray:
+    """Down (gravity's direction) in the camera frame, for ATTITUDE's roll and pitch
+    (radians) and the camera's mount ``R_body_cam``.
+
+    >>> DOWN = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    >>> gravity_in_camera(0.0, 0.0, DOWN).tolist()  # level: straight along the optical axis
+    [0.0, 0.0, 1.0]
+    """
+    down_body = rot_ned_body(roll, pitch, 0.0).T @ np.array([0.0, 0.0, 1.0])
+    return np.asarray(R_body_cam, float).T @ down_body

@@ -27,13 +27,14 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Protocol
+from typing import Any, Protocol
 
 from backend.camera import FrameSource, open_source
 from backend.encoder import EncodedFrame, FrameEncoder
 from backend.framebus import FrameBus
-from backend.frames import camera_yaw_in_pad
+from backend.frames import camera_yaw_in_pad, gravity_in_camera
 from backend.link import LinkEvent, VehicleLink
+from backend.missions.geometry import DOWN_MOUNT
 from backend.missions.manager import MissionManager
 from backend.recorder import Recorder
 from backend.services.events import EventLog
@@ -182,9 +183,16 @@ def build_station(settings: Settings) -> Station:
         source = _open_camera(settings, camera, link)
         results: FrameBus[Processed] = FrameBus("results")
 
-        def yaw_hint() -> float | None:
+        def hints() -> dict[str, Any]:
+            # The pad lies level and faces a known heading: the vehicle's attitude
+            # tells the pipeline which of the pad's twin and tilted poses is right.
             att = link.telemetry.attitude
-            return None if att is None else camera_yaw_in_pad(settings.pad_heading_deg, att.yaw)
+            if att is None:
+                return {}
+            return {
+                "yaw_hint": camera_yaw_in_pad(settings.pad_heading_deg, att.yaw),
+                "gravity_hint": gravity_in_camera(att.roll, att.pitch, DOWN_MOUNT),
+            }
 
         worker = VisionWorker(
             source,
@@ -192,7 +200,7 @@ def build_station(settings: Settings) -> Station:
             reference=references.current,
             camera=camera,
             process=references.process,
-            yaw_hint=yaw_hint,
+            hints=hints,
         )
         encoded: FrameBus[EncodedFrame] = FrameBus("encoded")
         encoder = FrameEncoder(

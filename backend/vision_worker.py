@@ -13,8 +13,9 @@ import statistics
 import threading
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -72,9 +73,11 @@ class VisionWorker:
     bus : where each result is published.
     reference : returns the active reference (``None``: frames wait unprocessed).
     camera : intrinsics at some size; scaled to each frame's size.
-    process : ``process(image_bgr, reference, camera, *, yaw_hint=None) -> FrameResult``
+    process : ``process(image_bgr, reference, camera, **hints) -> FrameResult``
         (``pipeline.process_frame``).
-    yaw_hint : returns the expected camera yaw in the pad frame (degrees) or ``None``.
+    hints : returns the keyword hints for this frame (``yaw_hint``, the camera's
+        yaw in the pad frame; ``gravity_hint``, down in the camera frame), from
+        what the vehicle reports; empty when it reports nothing yet.
     """
 
     def __init__(
@@ -85,7 +88,7 @@ class VisionWorker:
         reference: Callable[[], Reference | None],
         camera: Camera,
         process: Callable[..., FrameResult],
-        yaw_hint: Callable[[], float | None] | None = None,
+        hints: Callable[[], Mapping[str, Any]] | None = None,
         window: int = 30,
         join_timeout: float = 5.0,
     ) -> None:
@@ -94,7 +97,7 @@ class VisionWorker:
         self._camera = camera
         self._cameras: dict[tuple[int, int], Camera] = {(camera.width, camera.height): camera}
         self._process = process
-        self._yaw_hint = yaw_hint
+        self._hints = hints
         self._join_timeout = join_timeout
         self._bus = bus
         self._lock = threading.Lock()
@@ -185,8 +188,8 @@ class VisionWorker:
     def _handle(self, frame: Frame, reference: Reference) -> None:
         try:
             camera = self._camera_for(frame.image)
-            hint = self._yaw_hint() if self._yaw_hint is not None else None
-            result = self._process(frame.image, reference, camera, yaw_hint=hint)
+            hints = self._hints() if self._hints is not None else {}
+            result = self._process(frame.image, reference, camera, **hints)
         except Exception as exc:
             self._note_error(f"pipeline: {type(exc).__name__}: {exc}")
             log.exception("pipeline failed on frame %d", frame.seq)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from typing import Protocol
@@ -25,7 +26,9 @@ from pipeline.pose import (
     ippe_candidates,
     pick_by_yaw,
     project,
+    refine_with_gravity,
     tilt_deg,
+    tilt_from_level_deg,
     to_pose,
 )
 from pipeline.preprocess import (
@@ -46,6 +49,7 @@ MIN_EDGE_SUPPORT = 0.45  # the H's edges found where the pose puts them
 MIN_TEMPLATE_NCC = 0.4  # with the reference picture around the H
 BOARD_TOLERANCE = 0.2  # the board's brightness relative to the H's, against the reference's
 MAX_HUE = 0.3  # the board's chromaticity, L1 distance to the reference's
+MAX_TILT_OFF_DEG = 3.0  # a refined pose may lean this far from the attitude's level
 AMBIGUOUS_FIT = 0.8  # two poses whose RMS errors are within this ratio are a tie
 WIDE_SEARCH_PX = 6.0  # how far the whole pad's edges are first looked for
 SELF_SUFFICIENT_PX = 100.0  # an H this large pins the pose by itself
@@ -66,6 +70,7 @@ def process_frame(
     camera: Camera,
     *,
     yaw_hint: float | None = None,
+    gravity_hint: np.ndarray | None = None,
     method: str = DEFAULT_METHOD,
     verifier: CandidateVerifier | None = None,
 ) -> FrameResult:
@@ -81,6 +86,11 @@ def process_frame(
     yaw_hint : the camera's yaw in the pad frame (degrees, see
         ``pipeline.result.yaw_of``), e.g. from the vehicle's heading: picks
         which of the two poses of a 180-degree-symmetric pad to report.
+    gravity_hint : the direction of gravity (down) in the camera frame (3
+        numbers, any length), from the vehicle's roll and pitch and the
+        camera's mount: the pad lies level, so it tells which of a planar
+        pose's two solutions is right. Without it a pose that could be either
+        is reported with ``pose.ambiguous``.
     method : thresholding of the reference's channel, one of
         ``pipeline.preprocess.METHODS`` ("seed" is the dissertation's chain).
     verifier : an optional check of each H-shaped candidate's corner pattern
@@ -113,6 +123,7 @@ def process_frame(
         raise ValueError(f"yaw_hint must be a finite number of degrees or None, got {yaw_hint}")
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    gravity = _check_gravity(gravity_hint)
     cam = _camera_for(camera, image.shape[1], image.shape[0])
 
     timings: dict[str, float] = {}
@@ -178,12 +189,12 @@ def process_frame(
         # homography cannot follow, the pose is refined on the edges.
         polish = H is not hit.fit.H or cam.has_distortion
         H = _heading(H, reference, binary.smooth)
-        fitted = _fit_pose(reference, binary.smooth, cam, H, polish=polish)
+        fitted = _fit_pose(reference, binary.smooth, cam, H, polish=polish, gravity=gravity)
         clock.lap("pose")
         if fitted is None:
             continue
-        fit, support = fitted
-        found_pose = to_pose(fit.rvec, fit.tvec, fit.rms_px, reference.symmetric)
+        fit, support, ambiguous = fitted
+        found_pose = to_pose(fit.rvec, fit.tvec, fit.rms_px, reference.symmetric, ambiguous)
         pose = pick_by_yaw(found_pose, yaw_hint)
         # The corners as found on the frame (they do not depend on the camera
         # model), numbered for the reported pose: corner i is where reference
@@ -269,55 +280,105 @@ def _heading(H: np.ndarray, reference: Reference, smooth: np.ndarray) -> np.ndar
 
 
 def _fit_pose(
-    reference: Reference, smooth: np.ndarray, cam: Camera, H: np.ndarray, *, polish: bool
-):
+    reference: Reference,
+    smooth: np.ndarray,
+    cam: Camera,
+    H: np.ndarray,
+    *,
+    polish: bool,
+    gravity: np.ndarray | None,
+) -> tuple[EdgeFit, float, bool] | None:
     """The camera's pose over the pad from the located homography, or None.
 
     The homography already holds every edge of the pad that was found; the
     pose is the rigid motion that maps the pad's points (the H's corners and
-    the marks' vertices) where it does, by IPPE. A small pad seen nearly head
-    on fits two poses almost equally, tilted either way: unless one fits
-    clearly better, the one nearer to looking straight down wins, as a
-    hovering multirotor's camera does. IPPE works from the homography's local
-    Jacobian; a few Levenberg-Marquardt steps on all the points take a tenth
-    of a pixel off, which on a small pad is a few percent of range. With the
-    pad's other marks found (``polish``), the pose then takes a few steps on all
-    the pad's edges with the camera model, whose 6 unknowns noise moves less
-    than the homography's 8; kept when it finds at least as many of the edges.
-    Returns the fit and the share of the whole pad's edges found where the pose
-    puts them.
+    the marks' vertices) where it does: IPPE's two candidates, each taken a
+    few Levenberg-Marquardt steps on all the points (IPPE works from the
+    homography's local Jacobian; the steps take a tenth of a pixel off, a few
+    percent of range on a small pad).
+
+    A small pad seen nearly head on fits the two almost equally, tilted
+    either way. With the camera's attitude (``gravity``: down in the camera
+    frame), the one that lies level wins and is refined with the attitude as
+    a prior. Without it, the better fit wins, or on a tie the one nearer to
+    looking straight down (as a hovering multirotor's camera does), and the
+    pose is reported ambiguous when the two differ. With the pad's other marks
+    found (``polish``), an unhinted pose then takes a few steps on all the
+    pad's edges with the camera model, whose 6 unknowns noise moves less than
+    the homography's 8; kept when it finds at least as many of the edges.
+    Returns the fit, the share of the whole pad's edges found where the pose
+    puts them, and whether it is ambiguous.
     """
     pts_m = reference.pose_points_m
     px = apply_h(H, pts_m)
     obj = np.column_stack([pts_m, np.zeros(len(pts_m))])
-    best = None
+    cands = []
     for rvec0, tvec0 in ippe_candidates(pts_m, px, cam):
         rvec, tvec = cv2.solvePnPRefineLM(obj, px, cam.K, cam.dist, rvec0.copy(), tvec0.copy())
-        err = project(pts_m, rvec, tvec, cam) - px
-        rms = float(np.sqrt(np.mean(np.sum(err**2, axis=1))))
-        cand = (rms, tilt_deg(rvec), EdgeFit(rvec, tvec, rms, len(pts_m), 0))
-        if best is None or _better(cand, best):
-            best = cand
-    if best is None:
+        cands.append((_rms(pts_m, px, cam, rvec, tvec), tilt_deg(rvec), rvec, tvec))
+    if not cands:
         return None
-    fit = best[2]
     img = smooth.astype(np.float32)
+    ambiguous = False
+    if gravity is not None:
+        _, _, rvec, tvec = min(cands, key=lambda c: tilt_from_level_deg(c[2], gravity))
+        rvec, tvec = refine_with_gravity(pts_m, px, cam, rvec, tvec, gravity)
+        fit = EdgeFit(rvec, tvec, _rms(pts_m, px, cam, rvec, tvec), len(pts_m), 0)
+    else:
+        cands.sort(key=functools.cmp_to_key(lambda a, b: -1 if _better(a, b) else 1))
+        rms, _, rvec, tvec = cands[0]
+        ambiguous = len(cands) > 1 and _tie(cands[0], cands[1]) and _apart(cands[0], cands[1])
+        fit = EdgeFit(rvec, tvec, rms, len(pts_m), 0)
     support = edge_support(img, reference.edge_model, cam, fit.rvec, fit.tvec)
     if polish:
         refined = fit_edges(img, reference.edge_model, cam, fit.rvec, fit.tvec, search_px=1.5)
-        if refined is not None:
+        level = refined is not None and (
+            gravity is None or tilt_from_level_deg(refined.rvec, gravity) < MAX_TILT_OFF_DEG
+        )
+        if level:
             better = edge_support(img, reference.edge_model, cam, refined.rvec, refined.tvec)
             if better >= support:  # a drift along a flat valley finds fewer edges
                 fit, support = refined, better
-    return fit, support
+    return fit, support, ambiguous
+
+
+def _rms(pts_m: np.ndarray, px: np.ndarray, cam: Camera, rvec, tvec) -> float:
+    err = project(pts_m, rvec, tvec, cam) - px
+    return float(np.sqrt(np.mean(np.sum(err**2, axis=1))))
+
+
+def _tie(a, b) -> bool:
+    """Whether two (rms, tilt, ...) fits are as good: both within a tenth of a
+    pixel, or within AMBIGUOUS_FIT of each other."""
+    return max(a[0], b[0]) < 0.1 or min(a[0], b[0]) > AMBIGUOUS_FIT * max(a[0], b[0])
+
+
+def _apart(a, b) -> bool:
+    """Whether two (rms, tilt, rvec, tvec) poses differ by more than a degree."""
+    Ra, _ = cv2.Rodrigues(a[2])
+    Rb, _ = cv2.Rodrigues(b[2])
+    c = (np.trace(Ra.T @ Rb) - 1.0) / 2.0
+    return bool(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))) > 1.0)
 
 
 def _better(a, b) -> bool:
-    """(rms, tilt, fit) a before b: the better fit, or on a tie (both within a
-    tenth of a pixel, or within AMBIGUOUS_FIT of each other) the smaller tilt."""
-    if max(a[0], b[0]) < 0.1 or min(a[0], b[0]) > AMBIGUOUS_FIT * max(a[0], b[0]):
+    """(rms, tilt, ...) a before b: the better fit, or on a tie the smaller tilt."""
+    if _tie(a, b):
         return a[1] < b[1]
     return a[0] < b[0]
+
+
+def _check_gravity(gravity_hint) -> np.ndarray | None:
+    if gravity_hint is None:
+        return None
+    try:
+        g = np.asarray(gravity_hint, np.float64).reshape(3)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"gravity_hint must be 3 numbers or None, got {gravity_hint!r}") from exc
+    norm = float(np.linalg.norm(g))
+    if not np.all(np.isfinite(g)) or norm < 1e-9:
+        raise ValueError(f"gravity_hint must be a finite, non-zero 3-vector, got {gravity_hint!r}")
+    return g / norm
 
 
 def _camera_for(camera: Camera, width: int, height: int) -> Camera:

@@ -47,17 +47,21 @@ def tilt_deg(rvec: np.ndarray) -> float:
     return float(np.degrees(np.arccos(np.clip(-R_cam_pad[2, 2], -1.0, 1.0))))
 
 
-def to_pose(rvec: np.ndarray, tvec: np.ndarray, rms: float, symmetric: bool) -> Pose:
+def to_pose(
+    rvec: np.ndarray, tvec: np.ndarray, rms: float, symmetric: bool, ambiguous: bool = False
+) -> Pose:
     """Turn OpenCV's pad->camera (rvec, tvec) into the camera's pose in the pad frame."""
     R_cam_pad, _ = cv2.Rodrigues(rvec)
     R_pad_cam = R_cam_pad.T
     position = -R_pad_cam @ np.asarray(tvec, np.float64).reshape(3)
-    return Pose(position, R_pad_cam, rms, symmetric)
+    return Pose(position, R_pad_cam, rms, symmetric, ambiguous)
 
 
 def turned(pose: Pose) -> Pose:
     """The pose's twin for a pad that looks the same after a 180 degree turn."""
-    return Pose(TURN @ pose.position_m, TURN @ pose.R_pad_cam, pose.reprojection_px, True)
+    return Pose(
+        TURN @ pose.position_m, TURN @ pose.R_pad_cam, pose.reprojection_px, True, pose.ambiguous
+    )
 
 
 def pick_by_yaw(pose: Pose, yaw_hint: float | None) -> Pose:
@@ -87,3 +91,84 @@ def pose_to_vectors(pose: Pose) -> tuple[np.ndarray, np.ndarray]:
 
 def _angle_diff(a: float, b: float) -> float:
     return abs((a - b + 180.0) % 360.0 - 180.0)
+
+
+def pad_normal_in_camera(rvec: np.ndarray) -> np.ndarray:
+    """The pad's up direction (its +z) in the camera frame, for OpenCV's pad->camera rvec."""
+    R_cam_pad, _ = cv2.Rodrigues(np.asarray(rvec, np.float64).reshape(3, 1))
+    return R_cam_pad[:, 2]
+
+
+def tilt_from_level_deg(rvec: np.ndarray, gravity_cam: np.ndarray) -> float:
+    """Angle between the pad's up and straight up (against gravity), degrees."""
+    n = pad_normal_in_camera(rvec)
+    c = float(np.clip(-np.dot(n, gravity_cam), -1.0, 1.0))
+    return float(np.degrees(np.arccos(c)))
+
+
+def refine_with_gravity(
+    points_m: np.ndarray,
+    image_px: np.ndarray,
+    camera: Camera,
+    rvec: np.ndarray,
+    tvec: np.ndarray,
+    gravity_cam: np.ndarray,
+    *,
+    sigma_px: float = 0.3,
+    sigma_deg: float = 2.0,
+    iterations: int = 8,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The pose that fits the pad's pixels and lies level under known gravity.
+
+    Gauss-Newton over OpenCV's (rvec, tvec) on the reprojection errors (each
+    ``sigma_px``) and the angle between the pad's up and the gravity hint
+    (``sigma_deg``: what the autopilot's attitude and the camera's mount are
+    good for). A small pad seen nearly head on pins its tilt poorly from its
+    pixels alone; the attitude pins it, and the pixels the rest.
+
+    Examples
+    --------
+    >>> from pipeline.render import PadGeometry, camera_rotation
+    >>> from pipeline.result import Pose
+    >>> cam = Camera.from_fov(640, 480, 60.0)
+    >>> pts = PadGeometry().h_corners_m
+    >>> R = camera_rotation(20.0, tilt_deg=4.0, tilt_dir_deg=60.0)
+    >>> r, t = pose_to_vectors(Pose(np.array([0.2, -0.1, 5.0]), R, 0.0, True))
+    >>> px = project(pts, r, t, cam)
+    >>> g = -pad_normal_in_camera(r)  # the truth's gravity
+    >>> r1, t1 = refine_with_gravity(pts, px, cam, r + 0.02, t * 1.05, g)
+    >>> bool(np.abs(to_pose(r1, t1, 0.0, True).position_m - [0.2, -0.1, 5.0]).max() < 1e-3)
+    True
+    """
+    obj = _object(points_m)
+    img = np.asarray(image_px, np.float64).reshape(-1, 2)
+    g = np.asarray(gravity_cam, np.float64).reshape(3)
+    g = g / np.linalg.norm(g)
+    r = np.asarray(rvec, np.float64).reshape(3).copy()
+    t = np.asarray(tvec, np.float64).reshape(3).copy()
+    w_px = 1.0 / sigma_px
+    w_g = 1.0 / np.radians(sigma_deg)
+    eps = 1e-6
+    for _ in range(iterations):
+        proj, jac = cv2.projectPoints(obj, r, t, camera.K, camera.dist)
+        res_px = (proj.reshape(-1, 2) - img).ravel() * w_px
+        J_px = jac[:, :6] * w_px
+        # The pad's up against gravity's opposite, two components across it.
+        res_g = (pad_normal_in_camera(r) + g) * w_g
+        J_g = np.zeros((3, 6))
+        for k in range(3):
+            dr = np.zeros(3)
+            dr[k] = eps
+            J_g[:, k] = ((pad_normal_in_camera(r + dr) + g) * w_g - res_g) / eps
+        res = np.concatenate([res_px, res_g])
+        J = np.vstack([J_px, J_g])
+        A = J.T @ J + 1e-9 * np.eye(6)
+        try:
+            step = np.linalg.solve(A, -J.T @ res)
+        except np.linalg.LinAlgError:
+            break
+        r += step[:3]
+        t += step[3:]
+        if np.abs(step).max() < 1e-8:
+            break
+    return r.reshape(3, 1), t.reshape(3, 1)

@@ -28,13 +28,16 @@ class Pose:
     ``R_pad_cam``: rotation mapping camera-frame vectors (OpenCV: x right, y down,
     z forward) into the pad frame. ``symmetric``: the pad looks the same after a
     180 degree turn, so this pose and its turned twin fit equally well;
-    ``yaw_hint`` decides between them.
+    ``yaw_hint`` decides between them. ``ambiguous``: the pixels fit another
+    pose, tilted the other way, as well as this one (a small pad seen nearly
+    head on, with no ``gravity_hint`` to tell them apart).
     """
 
     position_m: np.ndarray
     R_pad_cam: np.ndarray
     reprojection_px: float
     symmetric: bool
+    ambiguous: bool = False
 
     @property
     def yaw_deg(self) -> float:
@@ -51,6 +54,7 @@ class Pose:
             "yaw_deg": self.yaw_deg,
             "reprojection_px": float(self.reprojection_px),
             "symmetric": bool(self.symmetric),
+            "ambiguous": bool(self.ambiguous),
         }
 
 

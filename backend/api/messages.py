@@ -33,6 +33,10 @@ class Pose(Model):
     yaw_deg: float
     reprojection_px: float
     symmetric: bool
+    ambiguous: bool = Field(
+        description="another pose, tilted the other way, fits the pixels as well "
+        "(no attitude to tell them apart)"
+    )
 
 
 class FrameResult(Model):

@@ -90,13 +90,21 @@ class ReferenceService:
         camera: Camera,
         *,
         yaw_hint: float | None = None,
+        gravity_hint: np.ndarray | None = None,
     ) -> FrameResult:
         """``process_frame`` with the active reference's pattern verifier, once trained."""
         active = self._active
         verifier = None
         if active is not None and active.reference is reference:
             verifier = self.trainer.verifier(active.id)
-        return process_frame(image_bgr, reference, camera, yaw_hint=yaw_hint, verifier=verifier)
+        return process_frame(
+            image_bgr,
+            reference,
+            camera,
+            yaw_hint=yaw_hint,
+            gravity_hint=gravity_hint,
+            verifier=verifier,
+        )
 
     def listen(self, listener: ActiveListener) -> None:
         """Call ``listener(active)`` whenever another reference becomes active."""

@@ -81,7 +81,9 @@ def run_worker(source, reference, seconds, **kw):
 
 def test_processes_frames_and_finds_the_pad(pad_frame):
     reference, frame = pad_frame
-    worker, got = run_worker(RenderedSource(frame, 10), reference, 1.0, yaw_hint=lambda: 20.0)
+    worker, got = run_worker(
+        RenderedSource(frame, 10), reference, 1.0, hints=lambda: {"yaw_hint": 20.0}
+    )
     assert len(got) >= 3
     assert all(p.result.detected for p in got)
     assert got[-1].result.pose is not None
@@ -139,7 +141,7 @@ def test_frames_of_another_size_use_the_scaled_camera(pad_frame):
     import cv2
 
     small = cv2.resize(frame, (320, 240), interpolation=cv2.INTER_AREA)
-    _, got = run_worker(RenderedSource(small, 10), reference, 0.8, yaw_hint=lambda: 20.0)
+    _, got = run_worker(RenderedSource(small, 10), reference, 0.8, hints=lambda: {"yaw_hint": 20.0})
     assert got and got[-1].camera.width == 320 and got[-1].result.detected
 
 

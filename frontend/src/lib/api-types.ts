@@ -1215,6 +1215,11 @@ export interface components {
         Pose: {
             /** R Pad Cam */
             R_pad_cam: number[][];
+            /**
+             * Ambiguous
+             * @description another pose, tilted the other way, fits the pixels as well (no attitude to tell them apart)
+             */
+            ambiguous: boolean;
             /** Position M */
             position_m: [
                 number,
