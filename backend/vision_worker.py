@@ -23,6 +23,8 @@ from backend.camera import Frame, FrameSource
 from backend.framebus import FrameBus
 from pipeline import Camera, FrameResult, Reference
 
+TRACK_MAX_AGE_S = 0.5  # an older detection says little about where the pad is now
+
 log = logging.getLogger(__name__)
 
 
@@ -73,8 +75,8 @@ class VisionWorker:
     bus : where each result is published.
     reference : returns the active reference (``None``: frames wait unprocessed).
     camera : intrinsics at some size; scaled to each frame's size.
-    process : ``process(image_bgr, reference, camera, **hints) -> FrameResult``
-        (``pipeline.process_frame``).
+    process : ``process(image_bgr, reference, camera, *, prior, **hints) -> FrameResult``
+        (``pipeline.process_frame``); ``prior`` is the last detection, when recent.
     hints : returns the keyword hints for this frame (``yaw_hint``, the camera's
         yaw in the pad frame; ``gravity_hint``, down in the camera frame), from
         what the vehicle reports; empty when it reports nothing yet.
@@ -189,7 +191,9 @@ class VisionWorker:
         try:
             camera = self._camera_for(frame.image)
             hints = self._hints() if self._hints is not None else {}
-            result = self._process(frame.image, reference, camera, **hints)
+            result = self._process(
+                frame.image, reference, camera, prior=self._prior(frame, reference), **hints
+            )
         except Exception as exc:
             self._note_error(f"pipeline: {type(exc).__name__}: {exc}")
             log.exception("pipeline failed on frame %d", frame.seq)
@@ -210,6 +214,15 @@ class VisionWorker:
             self._latencies.append(processed.latency_ms)
             self._detected.append(bool(result.detected))
         self._bus.publish(processed)
+
+    def _prior(self, frame: Frame, reference: Reference) -> FrameResult | None:
+        """The last detection of this reference, when recent enough to look near it first."""
+        last = self._latest
+        if last is None or last.reference is not reference or not last.result.detected:
+            return None
+        if frame.t_capture - last.frame.t_capture > TRACK_MAX_AGE_S:
+            return None
+        return last.result
 
     def _note_error(self, message: str) -> None:
         with self._lock:

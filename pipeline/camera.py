@@ -125,6 +125,17 @@ class Camera:
         K[1, 2] += 0.5 * sy - 0.5
         return Camera(width, height, K, self.dist.copy())
 
+    def cropped(self, x0: int, y0: int, width: int, height: int) -> Camera:
+        """The same camera for the window of ``width`` x ``height`` pixels at (x0, y0).
+
+        >>> Camera.from_fov(640, 480, 60.0).cropped(100, 50, 200, 100).K[:2, 2].tolist()
+        [219.5, 189.5]
+        """
+        K = self.K.copy()
+        K[0, 2] -= x0
+        K[1, 2] -= y0
+        return Camera(int(width), int(height), K, self.dist.copy())
+
     def undistort_points(self, pts: np.ndarray) -> np.ndarray:
         """Pixel points (N x 2) with the lens distortion removed (still in pixels)."""
         pts = np.asarray(pts, dtype=np.float64).reshape(-1, 2)

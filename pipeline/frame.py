@@ -1,67 +1,37 @@
-"""process_frame: from one camera frame to the H, its invariants and the pose."""
+"""process_frame: from one camera frame to the H, its invariants and the pose.
+
+Where the pipeline looks: when the caller hands in the last result (``prior``),
+first a window around where the pad was, at a resolution where the H spans
+about ``TRACK_SPAN_PX``; when that finds nothing, the whole frame at a
+working width of ``SEARCH_WIDTH_PX``. Whatever finds the H (``pipeline.find``),
+the pad is then measured at the frame's own resolution around it
+(``pipeline.measure``). The result says which way found it.
+"""
 
 from __future__ import annotations
 
-import functools
 import math
 import time
-from typing import Protocol
 
 import cv2
 import numpy as np
 
 from pipeline.camera import Camera
-from pipeline.candidates import (
-    MIN_BLOB_SEPARATION,
-    MIN_EVIDENCE,
-    MIN_H_AREA_PX,
-    blob_separation,
-    locate_all,
-)
-from pipeline.edgefit import EdgeFit, edge_support, fit_edges
-from pipeline.homography_fit import apply_h, fit_homography
-from pipeline.homography_fit import support as edge_share
+from pipeline.find import CandidateVerifier, Stages, Tally, find
+from pipeline.homography_fit import apply_h
+from pipeline.measure import measure
 from pipeline.moments import shape_moments
-from pipeline.pose import (
-    ippe_candidates,
-    pick_by_yaw,
-    project,
-    refine_with_gravity,
-    tilt_deg,
-    tilt_from_level_deg,
-    to_pose,
-)
-from pipeline.preprocess import (
-    DEFAULT_METHOD,
-    METHODS,
-    binarize_channel,
-    check_image,
-    subsample,
-    to_channel,
-)
+from pipeline.pose import pick_by_yaw, to_pose
+from pipeline.preprocess import DEFAULT_METHOD, METHODS, check_image
 from pipeline.reference import Reference
 from pipeline.result import FrameResult
-from pipeline.shapes import regions
-from pipeline.strokes import MAX_DIP, deepest_dip, stroke_samples
-from pipeline.template import compare
+from pipeline.view import View
 
-MIN_EDGE_SUPPORT = 0.45  # the H's edges found where the pose puts them
-MIN_TEMPLATE_NCC = 0.4  # with the reference picture around the H
-BOARD_TOLERANCE = 0.2  # the board's brightness relative to the H's, against the reference's
-MAX_HUE = 0.3  # the board's chromaticity, L1 distance to the reference's
-MAX_TILT_OFF_DEG = 3.0  # a refined pose may lean this far from the attitude's level
-AMBIGUOUS_FIT = 0.8  # two poses whose RMS errors are within this ratio are a tie
-WIDE_SEARCH_PX = 6.0  # how far the whole pad's edges are first looked for
-SELF_SUFFICIENT_PX = 100.0  # an H this large pins the pose by itself
-MIN_MARKS_FOUND = 0.5  # of the marks' resolvable sides, for the whole pad to count
-MARK_SIDE_PX = 4.0  # a mark's straight side shorter than this (a star's point) is not told
-_HALF_TURN = np.diag([-1.0, -1.0, 1.0])  # pad metres turned about the centre
+SEARCH_WIDTH_PX = 640  # the whole frame is searched at most this wide (the seed's 640 x 480)
+TRACK_SPAN_PX = 100.0  # a tracked H is looked for at a scale where it spans about this
+TRACK_REACH = 0.5  # the tracking window: the pad's last box grown by this much of its size
 
-
-class CandidateVerifier(Protocol):
-    """Checks a candidate's corner pattern (``pipeline.learn.Verifier`` is one)."""
-
-    def accepts(self, corners_px: np.ndarray, contour_px: np.ndarray, camera: Camera) -> bool: ...
+__all__ = ["CandidateVerifier", "process_frame"]
 
 
 def process_frame(
@@ -73,14 +43,14 @@ def process_frame(
     gravity_hint: np.ndarray | None = None,
     method: str = DEFAULT_METHOD,
     verifier: CandidateVerifier | None = None,
+    prior: FrameResult | None = None,
 ) -> FrameResult:
     """Find the reference's H in a frame and estimate the camera's pose over the pad.
 
     Parameters
     ----------
-    image_bgr : H x W x 3 uint8 frame (or H x W gray). Frames wider than 640 px are
-        subsampled to 640 (the seed's working size); ``camera`` may describe the
-        frame at any resolution of the same aspect ratio.
+    image_bgr : H x W x 3 uint8 frame (or H x W gray), any size; ``camera`` may
+        describe the frame at any resolution of the same aspect ratio.
     reference : the pad, from :meth:`Reference.from_image`.
     camera : the camera's intrinsics.
     yaw_hint : the camera's yaw in the pad frame (degrees, see
@@ -96,6 +66,8 @@ def process_frame(
     verifier : an optional check of each H-shaped candidate's corner pattern
         (the RBM/DBN of ``pipeline.learn``, trained for this reference),
         consulted before the pose.
+    prior : the last result of this camera (a detection of a moment ago): the
+        pad is first looked for where it was. ``found_by`` says which way found it.
 
     Returns
     -------
@@ -110,8 +82,10 @@ def process_frame(
     >>> scene = make_scene(pad, 0.55, rng=np.random.default_rng(0))
     >>> frame = render(scene, cam, np.array([0.1, -0.2, 3.0]), camera_rotation(30.0))
     >>> res = process_frame(frame, ref, cam, yaw_hint=30.0)
-    >>> res.detected, np.round(res.pose.position_m, 1).tolist()
-    (True, [0.1, -0.2, 3.0])
+    >>> res.detected, np.round(res.pose.position_m, 1).tolist(), res.found_by
+    (True, [0.1, -0.2, 3.0], 'search')
+    >>> process_frame(frame, ref, cam, yaw_hint=30.0, prior=res).found_by
+    'track'
     """
     t_start = time.perf_counter()
     image = check_image(image_bgr, "image_bgr")
@@ -123,249 +97,100 @@ def process_frame(
         raise ValueError(f"yaw_hint must be a finite number of degrees or None, got {yaw_hint}")
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    if prior is not None and not isinstance(prior, FrameResult):
+        raise ValueError(f"prior must be a FrameResult or None, got {type(prior).__name__}")
     gravity = _check_gravity(gravity_hint)
     cam = _camera_for(camera, image.shape[1], image.shape[0])
-
-    timings: dict[str, float] = {}
-    clock = _Clock(timings)
-    work, scale = subsample(image)
-    if scale != 1.0:
-        cam = cam.scaled(work.shape[1], work.shape[0])
-    binary = binarize_channel(to_channel(work, reference.projection), method)
-    clock.lap("preprocess")
-
-    area = float(work.shape[0] * work.shape[1])
-    found = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=0.5 * area)
-    clock.lap("contours")
-
-    located = rejected = unclear = unlike = unframed = broken = 0
-    for hit in locate_all(found, binary, reference):
-        located += 1
-        clock.lap("corners")
-        stroke = reference.leg_fraction * float(np.ptp(hit.corners, axis=0).max())
-        H_inv = np.linalg.inv(hit.fit.H)
-        blob = blob_separation(
-            binary.smooth,
-            hit.candidate.region,
-            stroke,
-            lambda px, Hi=H_inv: ~reference.is_paint(apply_h(Hi, px)),
+    stages = Stages()
+    tally = Tally()
+    search = View.whole(image.shape, SEARCH_WIDTH_PX)
+    mask = None
+    for way, view in (("track", _tracking_view(prior, reference, image.shape)), ("search", search)):
+        if view is None:
+            continue
+        hit, binary = find(
+            view.image(image),
+            reference,
+            view.camera(cam),
+            method=method,
+            verifier=verifier,
+            tally=tally,
+            stages=stages,
         )
-        if hit.evidence < MIN_EVIDENCE or not blob >= MIN_BLOB_SEPARATION:
-            unclear += 1
-            clock.lap("check")
+        mask = _mask_for(binary.mask, view, search)
+        if hit is None:
             continue
-        seen = compare(
-            work,
-            binary.smooth,
-            reference.template_pyramid,
-            reference.channel_px_per_m,
-            reference.corners_m,
-            hit.fit.H,
+        to_frame = np.linalg.inv(view.matrix)
+        measured = measure(
+            image,
+            reference,
+            cam,
+            to_frame @ hit.fit.H,
+            gravity=gravity,
+            found=(view, binary.smooth),
         )
-        # nan (a patch too small to compare, a board too dark for a hue) passes.
-        if seen.ncc < MIN_TEMPLATE_NCC:
-            unlike += 1
-            clock.lap("check")
+        stages.lap("pose")
+        if measured is None:
             continue
-        if abs(seen.board - seen.reference_board) > BOARD_TOLERANCE or seen.hue > MAX_HUE:
-            unframed += 1
-            clock.lap("check")
-            continue
-        samples = stroke_samples(reference.corners_m, hit.fit.H, reference.is_paint)
-        if deepest_dip(work, reference.projection.weights, samples) > MAX_DIP:
-            broken += 1
-            clock.lap("check")
-            continue
-        clock.lap("check")
-        if verifier is not None:
-            # Fitted corners: what the verifier sees does not depend on the threshold.
-            accepted = verifier.accepts(hit.corners, hit.candidate.region.contour, cam)
-            clock.lap("verify")
-            if not accepted:
-                rejected += 1
-                continue
-        H = _whole_pad(hit.fit.H, reference, binary.smooth)
-        # With the pad's other marks found, or a lens whose distortion the
-        # homography cannot follow, the pose is refined on the edges.
-        polish = H is not hit.fit.H or cam.has_distortion
-        H = _heading(H, reference, binary.smooth)
-        fitted = _fit_pose(reference, binary.smooth, cam, H, polish=polish, gravity=gravity)
-        clock.lap("pose")
-        if fitted is None:
-            continue
-        fit, support, ambiguous = fitted
-        found_pose = to_pose(fit.rvec, fit.tvec, fit.rms_px, reference.symmetric, ambiguous)
+        fit = measured.fit
+        found_pose = to_pose(
+            fit.rvec, fit.tvec, fit.rms_px, reference.symmetric, measured.ambiguous
+        )
         pose = pick_by_yaw(found_pose, yaw_hint)
         # The corners as found on the frame (they do not depend on the camera
         # model), numbered for the reported pose: corner i is where reference
         # corner i lies; the twin of a symmetric pad numbers them 6 apart.
-        corners = apply_h(H, reference.corners_m)
+        corners = apply_h(measured.H, reference.corners_m)
         if pose is not found_pose:
             corners = np.roll(corners, -6, axis=0)
-        region = hit.candidate.region
-        mom = shape_moments(region.contour)
-        timings["total"] = (time.perf_counter() - t_start) * 1e3
-        back = 1.0 / scale
+        contour = apply_h(to_frame, hit.candidate.region.contour.astype(np.float64))
+        mom = shape_moments(hit.candidate.region.contour)
+        stages.timings["total"] = (time.perf_counter() - t_start) * 1e3
         return FrameResult(
             detected=True,
-            corners_px=(corners + 0.5) * back - 0.5,
+            corners_px=corners,
             hu=tuple(float(v) for v in hit.candidate.hu),
             orientation_deg=float(mom.orientation_deg),
             eccentricity=float(mom.eccentricity),
             pose=pose,
-            timings_ms=timings,
-            contour_px=(region.contour.astype(np.float64) + 0.5) * back - 0.5,
-            score=support,
-            mask=binary.mask,
+            timings_ms=stages.timings,
+            contour_px=contour,
+            score=measured.support,
+            found_by=way,
+            homography=measured.H,
+            mask=mask,
         )
-    clock.lap("corners")
-    if not found:
-        reason = "no H-like shape in view"
-    elif not located:
-        reason = f"no H among {len(found)} bright shape(s)"
-    elif rejected:
-        reason = f"the verifier rejected {rejected} H-shaped mark(s)"
-    elif unclear:
-        reason = f"{unclear} H-shaped mark(s), none clearly an H on a plain board"
-    elif unlike:
-        reason = f"{unlike} H-shaped mark(s) that do not look like the reference picture"
-    elif unframed:
-        reason = f"{unframed} H-shaped mark(s) without the pad's board around them"
-    elif broken:
-        reason = f"{broken} H-shaped mark(s) with a stroke cut through"
-    else:
-        reason = f"{located} H-shaped mark(s), but no pad's edges around them"
-    return _nothing(timings, t_start, reason, binary.mask)
+    return _nothing(stages.timings, t_start, tally.reason(), mask)
 
 
-def _whole_pad(H: np.ndarray, reference: Reference, smooth: np.ndarray) -> np.ndarray:
-    """The homography refitted on the edges of the whole pad, when they are found.
-
-    The H alone pins the plane's tilt poorly: its corners, a few tens of pixels
-    apart, leave a degree of tilt to a tenth of a pixel. The pad's other marks
-    (a ring, a rim, bars) lie farther out; seen from the H's homography they may
-    be several pixels off, so they are searched for widely first. Kept when
-    most of the marks' edges are found and it still puts the H where it was.
-    An H over ``SELF_SUFFICIENT_PX`` pins the pose by itself.
-    """
-    model = reference.marks_model
-    span = float(np.ptp(apply_h(H, reference.corners_m), axis=0).max())
-    if model is None or span > SELF_SUFFICIENT_PX:
-        return H
-    img = smooth.astype(np.float32)
-    fit = fit_homography(
-        img, reference.edge_model, H, iterations=3, search_px=WIDE_SEARCH_PX, sides_alike=False
-    )
-    if fit is None or edge_share(img, model, fit.H, MARK_SIDE_PX) < MIN_MARKS_FOUND:
-        return H
-    moved = apply_h(fit.H, reference.corners_m) - apply_h(H, reference.corners_m)
-    if np.max(np.hypot(moved[:, 0], moved[:, 1])) > max(1.0, 0.03 * span):
-        return H
-    return fit.H
-
-
-def _heading(H: np.ndarray, reference: Reference, smooth: np.ndarray) -> np.ndarray:
-    """The homography (pad metres -> pixels) for the pad's heading.
-
-    The H alone looks the same after a half turn; on a pad whose other marks
-    do not (a triangle, stars above the H), the turn under which more of the
-    marks' edges are found is the pad's.
-    """
-    model = reference.marks_model
-    if reference.symmetric or model is None:
-        return H
-    img = smooth.astype(np.float32)
-    turned = H @ _HALF_TURN
-    return turned if edge_share(img, model, turned) > edge_share(img, model, H) else H
-
-
-def _fit_pose(
-    reference: Reference,
-    smooth: np.ndarray,
-    cam: Camera,
-    H: np.ndarray,
-    *,
-    polish: bool,
-    gravity: np.ndarray | None,
-) -> tuple[EdgeFit, float, bool] | None:
-    """The camera's pose over the pad from the located homography, or None.
-
-    The homography already holds every edge of the pad that was found; the
-    pose is the rigid motion that maps the pad's points (the H's corners and
-    the marks' vertices) where it does: IPPE's two candidates, each taken a
-    few Levenberg-Marquardt steps on all the points (IPPE works from the
-    homography's local Jacobian; the steps take a tenth of a pixel off, a few
-    percent of range on a small pad).
-
-    A small pad seen nearly head on fits the two almost equally, tilted
-    either way. With the camera's attitude (``gravity``: down in the camera
-    frame), the one that lies level wins and is refined with the attitude as
-    a prior. Without it, the better fit wins, or on a tie the one nearer to
-    looking straight down (as a hovering multirotor's camera does), and the
-    pose is reported ambiguous when the two differ. With the pad's other marks
-    found (``polish``), an unhinted pose then takes a few steps on all the
-    pad's edges with the camera model, whose 6 unknowns noise moves less than
-    the homography's 8; kept when it finds at least as many of the edges.
-    Returns the fit, the share of the whole pad's edges found where the pose
-    puts them, and whether it is ambiguous.
-    """
-    pts_m = reference.pose_points_m
-    px = apply_h(H, pts_m)
-    obj = np.column_stack([pts_m, np.zeros(len(pts_m))])
-    cands = []
-    for rvec0, tvec0 in ippe_candidates(pts_m, px, cam):
-        rvec, tvec = cv2.solvePnPRefineLM(obj, px, cam.K, cam.dist, rvec0.copy(), tvec0.copy())
-        cands.append((_rms(pts_m, px, cam, rvec, tvec), tilt_deg(rvec), rvec, tvec))
-    if not cands:
+def _tracking_view(
+    prior: FrameResult | None, reference: Reference, shape: tuple[int, ...]
+) -> View | None:
+    """The window around where the pad was, at a scale where its H spans about
+    ``TRACK_SPAN_PX``; None without a prior detection."""
+    if prior is None or not prior.detected or prior.homography is None:
         return None
-    img = smooth.astype(np.float32)
-    ambiguous = False
-    if gravity is not None:
-        _, _, rvec, tvec = min(cands, key=lambda c: tilt_from_level_deg(c[2], gravity))
-        rvec, tvec = refine_with_gravity(pts_m, px, cam, rvec, tvec, gravity)
-        fit = EdgeFit(rvec, tvec, _rms(pts_m, px, cam, rvec, tvec), len(pts_m), 0)
-    else:
-        cands.sort(key=functools.cmp_to_key(lambda a, b: -1 if _better(a, b) else 1))
-        rms, _, rvec, tvec = cands[0]
-        ambiguous = len(cands) > 1 and _tie(cands[0], cands[1]) and _apart(cands[0], cands[1])
-        fit = EdgeFit(rvec, tvec, rms, len(pts_m), 0)
-    support = edge_support(img, reference.edge_model, cam, fit.rvec, fit.tvec)
-    if polish:
-        refined = fit_edges(img, reference.edge_model, cam, fit.rvec, fit.tvec, search_px=1.5)
-        level = refined is not None and (
-            gravity is None or tilt_from_level_deg(refined.rvec, gravity) < MAX_TILT_OFF_DEG
-        )
-        if level:
-            better = edge_support(img, reference.edge_model, cam, refined.rvec, refined.tvec)
-            if better >= support:  # a drift along a flat valley finds fewer edges
-                fit, support = refined, better
-    return fit, support, ambiguous
+    w, h = reference.pad_size_m / 2, reference.pad_height_m / 2
+    px = apply_h(prior.homography, np.array([[-w, h], [w, h], [w, -h], [-w, -h]]))
+    if not np.all(np.isfinite(px)):
+        return None
+    span = float(np.ptp(px, axis=0).max())
+    h_span = float(np.ptp(apply_h(prior.homography, reference.corners_m), axis=0).max())
+    box = np.concatenate([px.min(axis=0), px.max(axis=0)])
+    return View.around(box, shape, TRACK_REACH * span + 8.0, TRACK_SPAN_PX / max(h_span, 1.0))
 
 
-def _rms(pts_m: np.ndarray, px: np.ndarray, cam: Camera, rvec, tvec) -> float:
-    err = project(pts_m, rvec, tvec, cam) - px
-    return float(np.sqrt(np.mean(np.sum(err**2, axis=1))))
-
-
-def _tie(a, b) -> bool:
-    """Whether two (rms, tilt, ...) fits are as good: both within a tenth of a
-    pixel, or within AMBIGUOUS_FIT of each other."""
-    return max(a[0], b[0]) < 0.1 or min(a[0], b[0]) > AMBIGUOUS_FIT * max(a[0], b[0])
-
-
-def _apart(a, b) -> bool:
-    """Whether two (rms, tilt, rvec, tvec) poses differ by more than a degree."""
-    Ra, _ = cv2.Rodrigues(a[2])
-    Rb, _ = cv2.Rodrigues(b[2])
-    c = (np.trace(Ra.T @ Rb) - 1.0) / 2.0
-    return bool(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))) > 1.0)
-
-
-def _better(a, b) -> bool:
-    """(rms, tilt, ...) a before b: the better fit, or on a tie the smaller tilt."""
-    if _tie(a, b):
-        return a[1] < b[1]
-    return a[0] < b[0]
+def _mask_for(mask: np.ndarray, view: View, search: View) -> np.ndarray:
+    """The threshold mask a view was searched with, in the search view's pixels
+    (a tracking window's mask is laid where the window is, the rest blank)."""
+    if view == search:
+        return mask
+    out = np.zeros(search.size[::-1], np.uint8)
+    to_search = search.matrix @ np.linalg.inv(view.matrix)
+    return cv2.warpAffine(
+        mask, to_search[:2], search.size, dst=out, flags=cv2.INTER_NEAREST,
+        borderMode=cv2.BORDER_TRANSPARENT,
+    )  # fmt: skip
 
 
 def _check_gravity(gravity_hint) -> np.ndarray | None:
@@ -408,15 +233,3 @@ def _nothing(
         reason=reason,
         mask=mask,
     )
-
-
-class _Clock:
-    def __init__(self, timings: dict[str, float]) -> None:
-        self.timings = timings
-        self.t = time.perf_counter()
-
-    def lap(self, name: str) -> None:
-        """Add the time since the last lap to stage ``name``."""
-        now = time.perf_counter()
-        self.timings[name] = self.timings.get(name, 0.0) + (now - self.t) * 1e3
-        self.t = now

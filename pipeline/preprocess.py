@@ -111,6 +111,16 @@ def to_channel(image_bgr: np.ndarray, projection: Projection = GRAY) -> np.ndarr
     return projection.apply(image_bgr)
 
 
+def smooth_channel(image_bgr: np.ndarray, projection: Projection = GRAY) -> np.ndarray:
+    """The frame on ``projection``'s channel, smoothed for the sensor noise (as
+    `binarize` smooths it before thresholding)."""
+    return _smooth(to_channel(image_bgr, projection))
+
+
+def _smooth(channel: np.ndarray) -> np.ndarray:
+    return cv2.GaussianBlur(channel, (5, 5), 1.0)
+
+
 def binarize(
     image_bgr: np.ndarray, method: str = DEFAULT_METHOD, projection: Projection = GRAY
 ) -> Binarized:
@@ -122,7 +132,7 @@ def binarize_channel(gray: np.ndarray, method: str = DEFAULT_METHOD) -> Binarize
     """Threshold one channel (uint8) in which the marks to find are bright."""
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-    smooth = cv2.GaussianBlur(gray, (5, 5), 1.0)
+    smooth = _smooth(gray)
     if method == "otsu":
         t, mask = cv2.threshold(smooth, 0, 255, cv2.THRESH_BINARY | cv2.THRESH_OTSU)
     elif method == "adaptive":

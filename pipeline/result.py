@@ -67,9 +67,12 @@ class FrameResult:
     invariants of the H's region (NaN, JSON null, when nothing was found).
     ``timings_ms``: wall time per stage. ``contour_px``: the H's boundary.
     ``score``: the share of the pad's edges found where the pose puts them
-    (0..1). ``reason``: why nothing was detected. ``mask``: the threshold mask
-    the pipeline worked on (uint8, 0/255, at its working size: frames wider
-    than 640 px are subsampled), for showing; not part of :meth:`to_dict`.
+    (0..1). ``reason``: why nothing was detected. ``found_by``: "track" (in a
+    window around where the pad was) or "search" (the whole frame).
+    ``homography``: pad metres -> frame pixels, for tracking the pad in the next
+    frame. ``mask``: the threshold mask the pipeline searched with (uint8, 0/255,
+    at its search size: frames wider than 640 px are searched subsampled), for
+    showing. Neither of the last two is part of :meth:`to_dict`.
     """
 
     detected: bool
@@ -82,6 +85,8 @@ class FrameResult:
     contour_px: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     score: float = 0.0
     reason: str = ""
+    found_by: str = ""
+    homography: np.ndarray | None = field(default=None, repr=False)
     mask: np.ndarray | None = field(default=None, repr=False)
 
     def to_dict(self) -> dict:
@@ -96,6 +101,7 @@ class FrameResult:
             "contour_px": np.asarray(self.contour_px, float).reshape(-1, 2).tolist(),
             "score": _finite(self.score),
             "reason": self.reason,
+            "found_by": self.found_by,
         }
 
 

@@ -52,6 +52,10 @@ class FrameResult(Model):
     contour_px: list[Point]
     score: float | None
     reason: str
+    found_by: str = Field(
+        description='"track": in a window around where the pad was; "search": the whole '
+        'frame; "" when nothing was found'
+    )
 
 
 class Axes(Model):

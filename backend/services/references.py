@@ -91,6 +91,7 @@ class ReferenceService:
         *,
         yaw_hint: float | None = None,
         gravity_hint: np.ndarray | None = None,
+        prior: FrameResult | None = None,
     ) -> FrameResult:
         """``process_frame`` with the active reference's pattern verifier, once trained."""
         active = self._active
@@ -104,6 +105,7 @@ class ReferenceService:
             yaw_hint=yaw_hint,
             gravity_hint=gravity_hint,
             verifier=verifier,
+            prior=prior,
         )
 
     def listen(self, listener: ActiveListener) -> None:

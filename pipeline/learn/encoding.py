@@ -213,7 +213,7 @@ class Encoder:
         Parameters
         ----------
         corners_px : (N, 2) the candidate's corners in pixels, in the reference's
-            order (as ``pipeline.frame.match_corners`` returns them).
+            order (as ``pipeline.candidates`` locates them).
         contour_px : (M, 2) the candidate's boundary in pixels.
         camera : the intrinsics of the image the pixels are in (default: the
             encoder's ``camera``).

@@ -812,6 +812,11 @@ export interface components {
             detected: boolean;
             /** Eccentricity */
             eccentricity: number | null;
+            /**
+             * Found By
+             * @description "track": in a window around where the pad was; "search": the whole frame; "" when nothing was found
+             */
+            found_by: string;
             /** Hu */
             hu: (number | null)[];
             /** Orientation Deg */

@@ -1,0 +1,152 @@
+"""Finding the pad's H in one view: candidates, their homographies, and the checks.
+
+Every located H (``pipeline.candidates``) must then be clearly an H on a plain
+board (edge support and shape overlap, the region against the band around
+it), look like the reference picture around it (pattern and board), have no
+stroke cut through, and pass the optional verifier. The first that does is
+the pad's.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+
+from pipeline.camera import Camera
+from pipeline.candidates import (
+    MIN_BLOB_SEPARATION,
+    MIN_EVIDENCE,
+    MIN_H_AREA_PX,
+    Located,
+    blob_separation,
+    locate_all,
+)
+from pipeline.homography_fit import apply_h
+from pipeline.preprocess import Binarized, binarize_channel, to_channel
+from pipeline.reference import Reference
+from pipeline.shapes import regions
+from pipeline.strokes import MAX_DIP, deepest_dip, stroke_samples
+from pipeline.template import compare
+
+MIN_TEMPLATE_NCC = 0.4  # with the reference picture around the H
+BOARD_TOLERANCE = 0.2  # the board's brightness relative to the H's, against the reference's
+MAX_HUE = 0.3  # the board's chromaticity, L1 distance to the reference's
+
+
+class CandidateVerifier(Protocol):
+    """Checks a candidate's corner pattern (``pipeline.learn.Verifier`` is one)."""
+
+    def accepts(self, corners_px: np.ndarray, contour_px: np.ndarray, camera: Camera) -> bool: ...
+
+
+@dataclass
+class Tally:
+    """What the checks turned down in a frame, for the reason when nothing is found."""
+
+    shapes: int = 0
+    located: int = 0
+    unclear: int = 0
+    unlike: int = 0
+    unframed: int = 0
+    broken: int = 0
+    rejected: int = 0
+
+    def reason(self) -> str:
+        if not self.shapes:
+            return "no H-like shape in view"
+        if not self.located:
+            return f"no H among {self.shapes} bright shape(s)"
+        for count, why in (
+            (self.rejected, "the verifier rejected {} H-shaped mark(s)"),
+            (self.unclear, "{} H-shaped mark(s), none clearly an H on a plain board"),
+            (self.unlike, "{} H-shaped mark(s) that do not look like the reference picture"),
+            (self.unframed, "{} H-shaped mark(s) without the pad's board around them"),
+            (self.broken, "{} H-shaped mark(s) with a stroke cut through"),
+        ):
+            if count:
+                return why.format(count)
+        return f"{self.located} H-shaped mark(s), but no pad's edges around them"
+
+
+@dataclass
+class Stages:
+    """Wall time per stage, in milliseconds."""
+
+    timings: dict[str, float] = field(default_factory=dict)
+    t: float = field(default_factory=time.perf_counter)
+
+    def lap(self, name: str) -> None:
+        now = time.perf_counter()
+        self.timings[name] = self.timings.get(name, 0.0) + (now - self.t) * 1e3
+        self.t = now
+
+
+def find(
+    image: np.ndarray,
+    reference: Reference,
+    camera: Camera,
+    *,
+    method: str,
+    verifier: CandidateVerifier | None,
+    tally: Tally,
+    stages: Stages,
+) -> tuple[Located, Binarized] | tuple[None, Binarized]:
+    """The pad's H in a view's image (BGR), with the view's binarized channel."""
+    binary = binarize_channel(to_channel(image, reference.projection), method)
+    stages.lap("preprocess")
+    area = float(image.shape[0] * image.shape[1])
+    found = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=0.5 * area)
+    tally.shapes += len(found)
+    stages.lap("contours")
+    for hit in locate_all(found, binary, reference):
+        tally.located += 1
+        stages.lap("corners")
+        verdict = _check(hit, image, binary, reference)
+        stages.lap("check")
+        if verdict:
+            setattr(tally, verdict, getattr(tally, verdict) + 1)
+            continue
+        if verifier is not None:
+            # Fitted corners: what the verifier sees does not depend on the threshold.
+            accepted = verifier.accepts(hit.corners, hit.candidate.region.contour, camera)
+            stages.lap("verify")
+            if not accepted:
+                tally.rejected += 1
+                continue
+        return hit, binary
+    stages.lap("corners")
+    return None, binary
+
+
+def _check(hit: Located, image: np.ndarray, binary: Binarized, reference: Reference) -> str:
+    """The name of the failed check (a ``Tally`` field), or "" when the H passes."""
+    stroke = reference.leg_fraction * float(np.ptp(hit.corners, axis=0).max())
+    H_inv = np.linalg.inv(hit.fit.H)
+    blob = blob_separation(
+        binary.smooth,
+        hit.candidate.region,
+        stroke,
+        lambda px: ~reference.is_paint(apply_h(H_inv, px)),
+    )
+    if hit.evidence < MIN_EVIDENCE or not blob >= MIN_BLOB_SEPARATION:
+        return "unclear"
+    seen = compare(
+        image,
+        binary.smooth,
+        reference.template_pyramid,
+        reference.channel_px_per_m,
+        reference.corners_m,
+        hit.fit.H,
+    )
+    # nan (a patch too small to compare, a board too dark for a hue) passes.
+    if seen.ncc < MIN_TEMPLATE_NCC:
+        return "unlike"
+    if abs(seen.board - seen.reference_board) > BOARD_TOLERANCE or seen.hue > MAX_HUE:
+        return "unframed"
+    samples = stroke_samples(reference.corners_m, hit.fit.H, reference.is_paint)
+    if deepest_dip(image, reference.projection.weights, samples) > MAX_DIP:
+        return "broken"
+    return ""

@@ -1,0 +1,235 @@
+"""Measuring the found pad: its homography on the whole pad's edges, its heading, the pose.
+
+The search finds the H at a working resolution; the pad is measured in a
+window around it at the frame's own resolution (no finer than
+``MEASURE_SPAN_PX`` across the pad: a pixel in a few hundred is all a pose
+needs), where its edges are sharpest.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from pipeline.camera import Camera
+from pipeline.edgefit import EdgeFit, edge_support, fit_edges
+from pipeline.homography_fit import apply_h, fit_homography
+from pipeline.homography_fit import support as edge_share
+from pipeline.pose import (
+    ippe_candidates,
+    project,
+    refine_with_gravity,
+    tilt_deg,
+    tilt_from_level_deg,
+)
+from pipeline.preprocess import smooth_channel
+from pipeline.reference import Reference
+from pipeline.view import View
+
+MEASURE_SPAN_PX = 320.0  # the pad is measured at most this many pixels across
+MAX_TILT_OFF_DEG = 3.0  # a refined pose may lean this far from the attitude's level
+AMBIGUOUS_FIT = 0.8  # two poses whose RMS errors are within this ratio are a tie
+WIDE_SEARCH_PX = 6.0  # how far the whole pad's edges are first looked for
+SELF_SUFFICIENT_PX = 100.0  # an H this large pins the pose by itself
+MIN_MARKS_FOUND = 0.5  # of the marks' resolvable sides, for the whole pad to count
+MARK_SIDE_PX = 4.0  # a mark's straight side shorter than this (a star's point) is not told
+_HALF_TURN = np.diag([-1.0, -1.0, 1.0])  # pad metres turned about the centre
+
+
+@dataclass(frozen=True, eq=False)
+class Measured:
+    """``H``: pad metres -> frame pixels; ``fit``: the pose (OpenCV pad -> camera);
+    ``support``: the share of the whole pad's edges found where the pose puts
+    them; ``ambiguous``: another pose fits as well (see `_fit_pose`)."""
+
+    H: np.ndarray
+    fit: EdgeFit
+    support: float
+    ambiguous: bool
+
+
+def measure(
+    frame: np.ndarray,
+    reference: Reference,
+    camera: Camera,
+    H: np.ndarray,
+    *,
+    gravity: np.ndarray | None,
+    found: tuple[View, np.ndarray] | None = None,
+) -> Measured | None:
+    """Measure the pad located by ``H`` (pad metres -> pixels of ``frame``, whose
+    camera is ``camera``). ``found``: the view the H was found in and its smoothed
+    channel, used again when it is already as fine as a measurement needs."""
+    outline = _pad_box_m(reference)
+    px = apply_h(H, outline)
+    span = float(np.ptp(px, axis=0).max())
+    box = np.concatenate([px.min(axis=0), px.max(axis=0)])
+    view = View.around(box, frame.shape, max(4.0, 0.1 * span), MEASURE_SPAN_PX / max(span, 1.0))
+    if view is None:
+        return None
+    if found is not None and _covers(found[0], view):
+        view, smooth = found
+        Hv = view.matrix @ H
+    else:
+        smooth = smooth_channel(view.image(frame), reference.projection)
+        Hv = view.matrix @ H
+        refit = fit_homography(smooth.astype(np.float32), reference.h_edges, Hv, search_px=2.5)
+        if refit is not None:
+            Hv = refit.H
+    cam = view.camera(camera)
+    whole = _whole_pad(Hv, reference, smooth)
+    # With the pad's other marks found, or a lens whose distortion the
+    # homography cannot follow, the pose is refined on the edges.
+    polish = whole is not Hv or cam.has_distortion
+    Hv = _heading(whole, reference, smooth)
+    fitted = _fit_pose(reference, smooth, cam, Hv, polish=polish, gravity=gravity)
+    if fitted is None:
+        return None
+    fit, support, ambiguous = fitted
+    return Measured(np.linalg.inv(view.matrix) @ Hv, fit, support, ambiguous)
+
+
+def _pad_box_m(reference: Reference) -> np.ndarray:
+    w, h = reference.pad_size_m / 2, reference.pad_height_m / 2
+    return np.array([[-w, h], [w, h], [w, -h], [-w, -h]])
+
+
+def _covers(found: View, need: View) -> bool:
+    """Whether the view the H was found in holds the measuring window as finely."""
+    inside = (
+        found.x0 <= need.x0 and found.y0 <= need.y0 and found.x1 >= need.x1 and found.y1 >= need.y1
+    )
+    return inside and found.scale >= need.scale - 1e-9
+
+
+def _whole_pad(H: np.ndarray, reference: Reference, smooth: np.ndarray) -> np.ndarray:
+    """The homography refitted on the edges of the whole pad, when they are found.
+
+    The H alone pins the plane's tilt poorly: its corners, a few tens of pixels
+    apart, leave a degree of tilt to a tenth of a pixel. The pad's other marks
+    (a ring, a rim, bars) lie farther out; seen from the H's homography they may
+    be several pixels off, so they are searched for widely first. Kept when
+    most of the marks' edges are found and it still puts the H where it was.
+    An H over ``SELF_SUFFICIENT_PX`` pins the pose by itself.
+    """
+    model = reference.marks_model
+    span = float(np.ptp(apply_h(H, reference.corners_m), axis=0).max())
+    if model is None or span > SELF_SUFFICIENT_PX:
+        return H
+    img = smooth.astype(np.float32)
+    fit = fit_homography(
+        img, reference.edge_model, H, iterations=3, search_px=WIDE_SEARCH_PX, sides_alike=False
+    )
+    if fit is None or edge_share(img, model, fit.H, MARK_SIDE_PX) < MIN_MARKS_FOUND:
+        return H
+    moved = apply_h(fit.H, reference.corners_m) - apply_h(H, reference.corners_m)
+    if np.max(np.hypot(moved[:, 0], moved[:, 1])) > max(1.0, 0.03 * span):
+        return H
+    return fit.H
+
+
+def _heading(H: np.ndarray, reference: Reference, smooth: np.ndarray) -> np.ndarray:
+    """The homography (pad metres -> pixels) for the pad's heading.
+
+    The H alone looks the same after a half turn; on a pad whose other marks
+    do not (a triangle, stars above the H), the turn under which more of the
+    marks' edges are found is the pad's.
+    """
+    model = reference.marks_model
+    if reference.symmetric or model is None:
+        return H
+    img = smooth.astype(np.float32)
+    turned = H @ _HALF_TURN
+    return turned if edge_share(img, model, turned) > edge_share(img, model, H) else H
+
+
+def _fit_pose(
+    reference: Reference,
+    smooth: np.ndarray,
+    cam: Camera,
+    H: np.ndarray,
+    *,
+    polish: bool,
+    gravity: np.ndarray | None,
+) -> tuple[EdgeFit, float, bool] | None:
+    """The camera's pose over the pad from the located homography, or None.
+
+    The homography already holds every edge of the pad that was found; the
+    pose is the rigid motion that maps the pad's points (the H's corners and
+    the marks' vertices) where it does: IPPE's two candidates, each taken a
+    few Levenberg-Marquardt steps on all the points (IPPE works from the
+    homography's local Jacobian; the steps take a tenth of a pixel off, a few
+    percent of range on a small pad).
+
+    A small pad seen nearly head on fits the two almost equally, tilted
+    either way. With the camera's attitude (``gravity``: down in the camera
+    frame), the one that lies level wins and is refined with the attitude as
+    a prior. Without it, the better fit wins, or on a tie the one nearer to
+    looking straight down (as a hovering multirotor's camera does), and the
+    pose is reported ambiguous when the two differ. With the pad's other marks
+    found (``polish``), an unhinted pose then takes a few steps on all the
+    pad's edges with the camera model, whose 6 unknowns noise moves less than
+    the homography's 8; kept when it finds at least as many of the edges.
+    Returns the fit, the share of the whole pad's edges found where the pose
+    puts them, and whether it is ambiguous.
+    """
+    pts_m = reference.pose_points_m
+    px = apply_h(H, pts_m)
+    obj = np.column_stack([pts_m, np.zeros(len(pts_m))])
+    cands = []
+    for rvec0, tvec0 in ippe_candidates(pts_m, px, cam):
+        rvec, tvec = cv2.solvePnPRefineLM(obj, px, cam.K, cam.dist, rvec0.copy(), tvec0.copy())
+        cands.append((_rms(pts_m, px, cam, rvec, tvec), tilt_deg(rvec), rvec, tvec))
+    if not cands:
+        return None
+    img = smooth.astype(np.float32)
+    ambiguous = False
+    if gravity is not None:
+        _, _, rvec, tvec = min(cands, key=lambda c: tilt_from_level_deg(c[2], gravity))
+        rvec, tvec = refine_with_gravity(pts_m, px, cam, rvec, tvec, gravity)
+        fit = EdgeFit(rvec, tvec, _rms(pts_m, px, cam, rvec, tvec), len(pts_m), 0)
+    else:
+        cands.sort(key=functools.cmp_to_key(lambda a, b: -1 if _better(a, b) else 1))
+        rms, _, rvec, tvec = cands[0]
+        ambiguous = len(cands) > 1 and _tie(cands[0], cands[1]) and _apart(cands[0], cands[1])
+        fit = EdgeFit(rvec, tvec, rms, len(pts_m), 0)
+    support = edge_support(img, reference.edge_model, cam, fit.rvec, fit.tvec)
+    if polish:
+        refined = fit_edges(img, reference.edge_model, cam, fit.rvec, fit.tvec, search_px=1.5)
+        level = refined is not None and (
+            gravity is None or tilt_from_level_deg(refined.rvec, gravity) < MAX_TILT_OFF_DEG
+        )
+        if level:
+            better = edge_support(img, reference.edge_model, cam, refined.rvec, refined.tvec)
+            if better >= support:  # a drift along a flat valley finds fewer edges
+                fit, support = refined, better
+    return fit, support, ambiguous
+
+
+def _rms(pts_m: np.ndarray, px: np.ndarray, cam: Camera, rvec, tvec) -> float:
+    err = project(pts_m, rvec, tvec, cam) - px
+    return float(np.sqrt(np.mean(np.sum(err**2, axis=1))))
+
+
+def _tie(a, b) -> bool:
+    """Whether two (rms, tilt, ...) fits are as good: both within a tenth of a
+    pixel, or within AMBIGUOUS_FIT of each other."""
+    return max(a[0], b[0]) < 0.1 or min(a[0], b[0]) > AMBIGUOUS_FIT * max(a[0], b[0])
+
+
+def _apart(a, b) -> bool:
+    """Whether two (rms, tilt, rvec, tvec) poses differ by more than a degree."""
+    Ra, _ = cv2.Rodrigues(a[2])
+    Rb, _ = cv2.Rodrigues(b[2])
+    c = (np.trace(Ra.T @ Rb) - 1.0) / 2.0
+    return bool(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))) > 1.0)
+
+
+def _better(a, b) -> bool:
+    """(rms, tilt, ...) a before b: the better fit, or on a tie the smaller tilt."""
+    if _tie(a, b):
+        return a[1] < b[1]
+    return a[0] < b[0]

@@ -1,0 +1,82 @@
+"""A window of the frame at some scale: where, and how finely, the pipeline looks.
+
+The search looks at the whole frame at a working width, tracking at a window
+around where the pad was, and the measurement at a window around where it is,
+as finely as the frame allows but no finer than it needs. Every view keeps the
+same pixel-centre convention as `pipeline.preprocess.subsample`: view pixel
+``u = (x - x0 + 0.5) * scale - 0.5`` for frame pixel ``x``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from pipeline.camera import Camera
+
+
+@dataclass(frozen=True)
+class View:
+    """Frame pixels [x0, x1) x [y0, y1), resized by ``scale`` (<= 1)."""
+
+    x0: int
+    y0: int
+    x1: int
+    y1: int
+    scale: float
+
+    @classmethod
+    def around(
+        cls, box: np.ndarray, frame_shape: tuple[int, ...], grow: float, scale: float
+    ) -> View | None:
+        """The view of a box (x0, y0, x1, y1 in frame pixels) grown by ``grow`` pixels on
+        each side and clipped to the frame, or None when nothing of it is in the frame."""
+        h, w = frame_shape[:2]
+        x0 = max(0, math.floor(box[0] - grow))
+        y0 = max(0, math.floor(box[1] - grow))
+        x1 = min(w, math.ceil(box[2] + grow) + 1)
+        y1 = min(h, math.ceil(box[3] + grow) + 1)
+        if x1 - x0 < 16 or y1 - y0 < 16:
+            return None
+        return cls(x0, y0, x1, y1, float(min(1.0, max(scale, 16.0 / min(x1 - x0, y1 - y0)))))
+
+    @classmethod
+    def whole(cls, frame_shape: tuple[int, ...], max_width: int) -> View:
+        h, w = frame_shape[:2]
+        return cls(0, 0, w, h, min(1.0, max_width / w))
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """(width, height) of the view's image."""
+        w, h = self.x1 - self.x0, self.y1 - self.y0
+        if self.scale == 1.0:
+            return w, h
+        return max(1, round(w * self.scale)), max(1, round(h * self.scale))
+
+    @property
+    def matrix(self) -> np.ndarray:
+        """3 x 3: frame pixels -> view pixels."""
+        w, h = self.x1 - self.x0, self.y1 - self.y0
+        sx, sy = self.size[0] / w, self.size[1] / h
+        return np.array(
+            [
+                [sx, 0.0, -sx * self.x0 + 0.5 * sx - 0.5],
+                [0.0, sy, -sy * self.y0 + 0.5 * sy - 0.5],
+                [0.0, 0.0, 1.0],
+            ]
+        )
+
+    def image(self, frame: np.ndarray) -> np.ndarray:
+        crop = frame[self.y0 : self.y1, self.x0 : self.x1]
+        if self.size == (crop.shape[1], crop.shape[0]):
+            return crop
+        return cv2.resize(crop, self.size, interpolation=cv2.INTER_AREA)
+
+    def camera(self, camera: Camera) -> Camera:
+        """The frame's camera (``camera`` at the frame's size) for this view."""
+        cam = camera.cropped(self.x0, self.y0, self.x1 - self.x0, self.y1 - self.y0)
+        w, h = self.size
+        return cam if (w, h) == (cam.width, cam.height) else cam.scaled(w, h)
