@@ -47,7 +47,9 @@ from backend.settings import Settings, resolve_token
 from backend.storage import Storage
 from backend.viewer3d import Viewer3D, ViewerFeed
 from backend.vision_worker import Processed, VisionWorker
-from pipeline import Camera
+from pipeline import Camera, Reference
+
+APPROACH_MARGIN = 0.8  # missions look for the pad this far under where it is reliably found
 
 log = logging.getLogger(__name__)
 
@@ -177,7 +179,12 @@ def build_station(settings: Settings) -> Station:
             heartbeat_timeout_s=settings.link_timeout_s,
             command_timeout_s=settings.command_timeout_s,
         )
-        vehicle = VehicleService(link, settings, url=url)
+        vehicle = VehicleService(
+            link,
+            settings,
+            url=url,
+            approach_alt=lambda: approach_altitude(references.current(), camera),
+        )
 
         camera = _camera_model(settings)
         source = _open_camera(settings, camera, link)
@@ -309,6 +316,21 @@ def _link_event_handler(events: EventLog, flights: FlightService) -> Callable[[L
         events.emit(event.kind, link_event_text(event), dict(event.data))
 
     return on_link_event
+
+
+def approach_altitude(reference: Reference | None, camera: Camera) -> float | None:
+    """A margin (APPROACH_MARGIN) under the height up to which ``reference``'s pad is
+    reliably found with ``camera``, within 2-30 m; None without a reference.
+
+    >>> from pipeline.render import make_pad_image
+    >>> pad = Reference.from_image(make_pad_image(400), 0.55)
+    >>> approach_altitude(pad, Camera.from_fov(640, 480, 60.0))
+    4.4
+    """
+    if reference is None:
+        return None
+    alt = APPROACH_MARGIN * reference.reliable_altitude_m(camera)
+    return round(min(30.0, max(2.0, alt)), 1)
 
 
 def _camera_model(settings: Settings) -> Camera:

@@ -23,11 +23,10 @@ from pipeline.measure import measure
 from pipeline.moments import shape_moments
 from pipeline.pose import pick_by_yaw, to_pose
 from pipeline.preprocess import DEFAULT_METHOD, METHODS, check_image
-from pipeline.reference import Reference
+from pipeline.reference import SEARCH_WIDTH_PX, Reference
 from pipeline.result import FrameResult
 from pipeline.view import View
 
-SEARCH_WIDTH_PX = 640  # the whole frame is searched at most this wide (the seed's 640 x 480)
 TRACK_SPAN_PX = 100.0  # a tracked H is looked for at a scale where it spans about this
 TRACK_REACH = 0.5  # the tracking window: the pad's last box grown by this much of its size
 

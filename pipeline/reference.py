@@ -10,6 +10,7 @@ from functools import cached_property
 import cv2
 import numpy as np
 
+from pipeline.camera import Camera
 from pipeline.colour import Projection, contrast, learn_projection
 from pipeline.edgefit import EdgeModel
 from pipeline.edges import refine_polygon
@@ -21,6 +22,8 @@ from pipeline.shape_match import ShapeMatcher
 from pipeline.template import reference_pyramid
 
 H_CORNERS = 12
+RELIABLE_H_PX = 28.0  # an H this many pixels across is found in nearly every frame
+SEARCH_WIDTH_PX = 640  # frames are searched at most this wide (pipeline.frame)
 _WORK_MAX = 1024  # pictures are measured at up to this many pixels a side
 _LEVELS = 9  # thresholds tried per channel between its 2nd and 98th percentiles
 _MIN_H_AREA = 0.002  # of the picture: smaller marks are text or noise, not the pad's H
@@ -112,6 +115,19 @@ class Reference:
         if picture.shape[:2] != (h, w):
             picture = cv2.resize(picture, (w, h), interpolation=cv2.INTER_AREA)
         return reference_pyramid(picture, self.channel)
+
+    def reliable_altitude_m(self, camera: Camera, min_h_px: float = RELIABLE_H_PX) -> float:
+        """The height up to which this pad's H spans ``min_h_px`` in the frames the
+        pipeline searches (``camera``'s width brought down to 640 px), looking
+        straight down: where missions can expect to find the pad.
+
+        >>> from pipeline.render import make_pad_image
+        >>> ref = Reference.from_image(make_pad_image(400), 0.55)
+        >>> round(ref.reliable_altitude_m(Camera.from_fov(640, 480, 60.0)), 1)
+        5.4
+        """
+        fx = camera.fx * min(1.0, SEARCH_WIDTH_PX / camera.width)
+        return fx * self.h_size_m / min_h_px
 
     @property
     def h_size_m(self) -> float:

@@ -20,10 +20,18 @@ COMMANDS = ("arm", "disarm", "force-disarm", "land", "rtl", "takeoff", "mode")
 class VehicleService:
     """One vehicle over ``link`` (``url``: what it is connected to)."""
 
-    def __init__(self, link: VehicleLink, settings: Settings, *, url: str) -> None:
+    def __init__(
+        self,
+        link: VehicleLink,
+        settings: Settings,
+        *,
+        url: str,
+        approach_alt: Callable[[], float | None] = lambda: None,
+    ) -> None:
         self.link = link
         self.url = url
         self._settings = settings
+        self._approach_alt = approach_alt
 
     @property
     def telemetry(self) -> Telemetry:
@@ -32,6 +40,11 @@ class VehicleService:
     @property
     def link_up(self) -> bool:
         return self.link.state == LinkState.UP
+
+    def approach_altitude_m(self) -> float | None:
+        """Where missions look for the pad from by default: a margin under the height
+        up to which the active pad is reliably found with this camera."""
+        return self._approach_alt()
 
     def command(self, name: str, *args: Any) -> CommandResult:
         """Run one command of :data:`COMMANDS` (blocks until ACK or timeout)."""
@@ -48,8 +61,17 @@ class VehicleService:
         return method[name](*args)
 
     def land_config(self, **changes: Any) -> LandConfig:
-        """Mission settings for this station's pad (its place and heading from settings)."""
+        """Mission settings for this station's pad (its place and heading from settings).
+
+        Without an ``approach_alt_m`` the pad is looked for from where it is still
+        reliably found with this pad and camera (`approach_altitude_m`).
+        """
         s = self._settings
+        if changes.get("approach_alt_m") is None:
+            changes.pop("approach_alt_m", None)
+            alt = self.approach_altitude_m()
+            if alt is not None:
+                changes["approach_alt_m"] = alt
         return LandConfig(
             pad_north_m=s.pad_north,
             pad_east_m=s.pad_east,

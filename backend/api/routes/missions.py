@@ -44,7 +44,13 @@ class HoverRequest(_Finite):
 
 class LandRequest(_Finite):
     strategy: Literal["plnd", "guided"] = "plnd"
-    approach_alt_m: float = Field(4.0, gt=0, le=50, description="height to look for the pad")
+    approach_alt_m: float | None = Field(
+        None,
+        gt=0,
+        le=50,
+        description="height to look for the pad from; by default a margin under where "
+        "the active pad is still reliably found with this camera",
+    )
     abort_mode: Literal["LOITER", "RTL"] = "LOITER"
     lost_timeout_s: float = Field(5.0, gt=0, le=120)
     search_s: float = Field(8.0, gt=0, le=600)

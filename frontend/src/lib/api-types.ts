@@ -904,10 +904,9 @@ export interface components {
             abort_mode: "LOITER" | "RTL";
             /**
              * Approach Alt M
-             * @description height to look for the pad
-             * @default 4
+             * @description height to look for the pad from; by default a margin under where the active pad is still reliably found with this camera
              */
-            approach_alt_m: number;
+            approach_alt_m?: number | null;
             /**
              * Lost Timeout S
              * @default 5

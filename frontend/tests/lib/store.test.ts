@@ -48,6 +48,7 @@ function frame(seq: number, detected = true): FrameMessage {
       pose: null,
       timings_ms: {},
       contour_px: [],
+      found_by: detected ? "search" : "",
       score: 0.9,
       reason: "",
     },
