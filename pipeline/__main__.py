@@ -16,7 +16,7 @@ import numpy as np
 
 from pipeline import Camera, Reference, process_frame
 from pipeline.draw import annotate
-from pipeline.preprocess import DEFAULT_METHOD, METHODS, binarize, subsample
+from pipeline.preprocess import DEFAULT_METHOD, METHODS
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -63,14 +63,14 @@ def _analyze(args: argparse.Namespace) -> int:
     result = process_frame(frame, reference, camera, yaw_hint=args.yaw_hint, method=args.method)
     print(json.dumps(result.to_dict(), indent=2))
     if args.out:
-        _write(args.out, frame, result, camera, args.method)
+        _write(args.out, frame, result, camera)
     return 0
 
 
-def _write(path: Path, frame, result, camera, method: str) -> None:
-    mask = binarize(subsample(frame)[0], method).mask
+def _write(path: Path, frame, result, camera) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
-    if not cv2.imwrite(str(path), annotate(frame, result, camera, mask=mask)):
+    # The mask the pipeline searched with, on the reference's channel.
+    if not cv2.imwrite(str(path), annotate(frame, result, camera, mask=result.mask)):
         raise ValueError(f"cannot write {path}")
     print(f"annotated frame written to {path}", file=sys.stderr)
 
@@ -89,7 +89,7 @@ def _demo(args: argparse.Namespace) -> int:
     print(json.dumps(result.to_dict(), indent=2))
     truth = np.round(view.position_m, 3).tolist()
     print(f"true camera position (pad frame, m): {truth}", file=sys.stderr)
-    _write(args.out, frame, result, camera, DEFAULT_METHOD)
+    _write(args.out, frame, result, camera)
     return 0
 
 
