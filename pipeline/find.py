@@ -93,8 +93,15 @@ def find(
     verifier: CandidateVerifier | None,
     tally: Tally,
     stages: Stages,
+    tracking: bool = False,
 ) -> tuple[Located, Binarized] | tuple[None, Binarized]:
-    """The pad's H in a view's image (BGR), with the view's binarized channel."""
+    """The pad's H in a view's image (BGR), with the view's binarized channel.
+
+    ``tracking``: the view is the window where the pad was a moment ago: an H
+    found there that is clearly an H is the pad (a look-alike does not take
+    its place between two frames), so the comparisons with the reference
+    picture, there to turn down look-alikes at first sight, are skipped.
+    """
     binary = binarize_channel(to_channel(image, reference.projection), method)
     stages.lap("preprocess")
     area = float(image.shape[0] * image.shape[1])
@@ -104,7 +111,7 @@ def find(
     for hit in locate_all(found, binary, reference):
         tally.located += 1
         stages.lap("corners")
-        verdict = _check(hit, image, binary, reference)
+        verdict = _check(hit, image, binary, reference, full=not tracking)
         stages.lap("check")
         if verdict:
             setattr(tally, verdict, getattr(tally, verdict) + 1)
@@ -121,8 +128,11 @@ def find(
     return None, binary
 
 
-def _check(hit: Located, image: np.ndarray, binary: Binarized, reference: Reference) -> str:
-    """The name of the failed check (a ``Tally`` field), or "" when the H passes."""
+def _check(
+    hit: Located, image: np.ndarray, binary: Binarized, reference: Reference, *, full: bool
+) -> str:
+    """The name of the failed check (a ``Tally`` field), or "" when the H passes;
+    without ``full``, only whether it is clearly an H on a plain board."""
     stroke = reference.leg_fraction * float(np.ptp(hit.corners, axis=0).max())
     H_inv = np.linalg.inv(hit.fit.H)
     blob = blob_separation(
@@ -133,6 +143,8 @@ def _check(hit: Located, image: np.ndarray, binary: Binarized, reference: Refere
     )
     if hit.evidence < MIN_EVIDENCE or not blob >= MIN_BLOB_SEPARATION:
         return "unclear"
+    if not full:
+        return ""
     seen = compare(
         image,
         binary.smooth,

@@ -115,6 +115,7 @@ def process_frame(
             verifier=verifier,
             tally=tally,
             stages=stages,
+            tracking=way == "track",
         )
         mask = _mask_for(binary.mask, view, search)
         if hit is None:

@@ -29,11 +29,13 @@ class HomographyFit:
     """``H``: 3 x 3 map from pad metres (x, y, 1) to frame pixels. ``rms_px``: RMS
     distance of the inlier edge points to the model's sides. ``support``: per
     visible side, the share of its samples with an edge of the right polarity
-    within 0.75 px of where ``H`` puts it, averaged over the sides."""
+    within 0.75 px of where ``H`` puts it, averaged over the sides;
+    ``side_found``: those shares, per side of the model (nan for sides not seen)."""
 
     H: np.ndarray
     rms_px: float
     support: float
+    side_found: np.ndarray  # per model side: share of its samples on an edge (nan: not seen)
 
 
 def apply_h(H: np.ndarray, pts: np.ndarray) -> np.ndarray:
@@ -109,8 +111,9 @@ def fit_homography(
         delta, ok = edge_offsets(img, proj, normal, search)
         if np.count_nonzero(ok) < 10:
             return None
+        J_all = np.einsum("nk,nkp->np", normal, jac_n) / sp
         r = -delta[ok]
-        J = np.einsum("nk,nkp->np", normal[ok], jac_n[ok]) / sp
+        J = J_all[ok]
         keep = np.abs(r - np.median(r)) <= max(0.5, 3.0 * _mad(r))
         r, J, sid = r[keep], J[keep], side[ok][keep]
         if len(r) < 10:
@@ -129,13 +132,18 @@ def fit_homography(
             return None
         h = h + step
         fitted = float(np.sqrt(np.mean((r + J @ step) ** 2)))
+        # Where each edge lies after this step: the support, without measuring again.
+        after = ok & (np.abs(delta - J_all @ step) <= 0.75)
+        last = (side, after, _in_view(proj, img.shape))
         if it > 0 and np.abs(step).max() < 0.05 * sp:  # under ~0.05 px anywhere on the H
             break
     if fitted is None:
         return None
     H = np.linalg.inv(Tp) @ _h_matrix(h) @ Tm
     H = H / H[2, 2]
-    return HomographyFit(H, fitted, support(img, model, H))
+    found = _side_shares(len(model.a_m), *last)
+    seen = np.isfinite(found)
+    return HomographyFit(H, fitted, float(found[seen].mean()) if seen.any() else 0.0, found)
 
 
 def support(
@@ -152,15 +160,24 @@ def support(
     pts_m, normal, side = samples
     proj = apply_h(H, pts_m)
     delta, ok = edge_offsets(image, proj, normal, 1.5)
-    h, w = image.shape[:2]
-    seen = (proj[:, 0] > 2) & (proj[:, 1] > 2) & (proj[:, 0] < w - 3) & (proj[:, 1] < h - 3)
-    if not seen.any():
-        return 0.0
-    hit = (ok & (np.abs(delta) <= 0.75))[seen].astype(np.float64)
-    sides = side[seen]
-    n = np.bincount(sides)
-    present = n > 0
-    return float(np.mean(np.bincount(sides, hit)[present] / n[present]))
+    found = _side_shares(
+        len(model.a_m), side, ok & (np.abs(delta) <= 0.75), _in_view(proj, image.shape)
+    )
+    seen = np.isfinite(found)
+    return float(found[seen].mean()) if seen.any() else 0.0
+
+
+def _in_view(proj: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    h, w = shape[:2]
+    return (proj[:, 0] > 2) & (proj[:, 1] > 2) & (proj[:, 0] < w - 3) & (proj[:, 1] < h - 3)
+
+
+def _side_shares(n_sides: int, side: np.ndarray, hit: np.ndarray, seen: np.ndarray) -> np.ndarray:
+    """Per side, the share of its seen samples that hit an edge (nan: none seen)."""
+    n = np.bincount(side[seen], minlength=n_sides).astype(np.float64)
+    hits = np.bincount(side[seen], hit[seen].astype(np.float64), minlength=n_sides)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(n > 0, hits / n, np.nan)
 
 
 def _samples(

@@ -16,7 +16,7 @@ import numpy as np
 
 from pipeline.camera import Camera
 from pipeline.edgefit import EdgeFit, edge_support, fit_edges
-from pipeline.homography_fit import apply_h, fit_homography
+from pipeline.homography_fit import HomographyFit, apply_h, fit_homography
 from pipeline.homography_fit import support as edge_share
 from pipeline.pose import (
     ippe_candidates,
@@ -123,12 +123,26 @@ def _whole_pad(H: np.ndarray, reference: Reference, smooth: np.ndarray) -> np.nd
     fit = fit_homography(
         img, reference.edge_model, H, iterations=3, search_px=WIDE_SEARCH_PX, sides_alike=False
     )
-    if fit is None or edge_share(img, model, fit.H, MARK_SIDE_PX) < MIN_MARKS_FOUND:
+    if fit is None or _marks_found(fit, reference) < MIN_MARKS_FOUND:
         return H
     moved = apply_h(fit.H, reference.corners_m) - apply_h(H, reference.corners_m)
     if np.max(np.hypot(moved[:, 0], moved[:, 1])) > max(1.0, 0.03 * span):
         return H
     return fit.H
+
+
+def _marks_found(fit: HomographyFit, reference: Reference) -> float:
+    """The share of the marks' sides (long enough to tell, ``MARK_SIDE_PX``) that the
+    whole-pad fit found; the model lists the H's 12 sides first."""
+    model = reference.edge_model
+    ends = apply_h(fit.H, np.vstack([model.a_m, model.b_m]))
+    n = len(model.a_m)
+    length = np.hypot(*(ends[n:] - ends[:n]).T)
+    use = np.arange(n) >= len(reference.corners_m)
+    use &= (length >= MARK_SIDE_PX) | model.curved
+    found = fit.side_found[use]
+    found = found[np.isfinite(found)]
+    return float(found.mean()) if len(found) else 0.0
 
 
 def _heading(H: np.ndarray, reference: Reference, smooth: np.ndarray) -> np.ndarray:
@@ -181,8 +195,15 @@ def _fit_pose(
     obj = np.column_stack([pts_m, np.zeros(len(pts_m))])
     cands = []
     for rvec0, tvec0 in ippe_candidates(pts_m, px, cam):
+        cands.append((_rms(pts_m, px, cam, rvec0, tvec0), tilt_deg(rvec0), rvec0, tvec0))
+    # Both of IPPE's poses are refined only when they compete (a small pad
+    # seen head on); otherwise the one that fits.
+    cands.sort(key=lambda c: c[0])
+    if len(cands) > 1 and not _tie(cands[0], cands[1]):
+        cands = cands[:1]
+    for i, (_, _, rvec0, tvec0) in enumerate(cands):
         rvec, tvec = cv2.solvePnPRefineLM(obj, px, cam.K, cam.dist, rvec0.copy(), tvec0.copy())
-        cands.append((_rms(pts_m, px, cam, rvec, tvec), tilt_deg(rvec), rvec, tvec))
+        cands[i] = (_rms(pts_m, px, cam, rvec, tvec), tilt_deg(rvec), rvec, tvec)
     if not cands:
         return None
     img = smooth.astype(np.float32)
