@@ -65,6 +65,8 @@ class Reference:
     leg_fraction: float
     channel: np.ndarray  # the picture on the learned channel (work resolution)
     channel_px_per_m: float
+    paint_bgr: tuple[float, float, float]  # the H's colour on the picture (median)
+    board_bgr: tuple[float, float, float]  # its board's, right around it
 
     @cached_property
     def edge_model(self) -> EdgeModel:
@@ -220,6 +222,8 @@ class Reference:
             projection=projection,
             contrast=h_contrast,
             leg_fraction=fit.leg_fraction,
+            paint_bgr=_median_bgr(work, h_mask),
+            board_bgr=_median_bgr(work, board_mask),
             channel=channel,
             channel_px_per_m=ww / pad_size_m,
         )
@@ -361,6 +365,11 @@ def _h_and_board(region: np.ndarray, fit: HFit) -> tuple[np.ndarray, np.ndarray]
     cv2.fillConvexPoly(hull, cv2.convexHull(fit.corners.astype(np.int32)), 1)
     board = (far | (hull > 0)) & ~near
     return core, board
+
+
+def _median_bgr(image: np.ndarray, mask: np.ndarray) -> tuple[float, float, float]:
+    b, g, r = (float(v) for v in np.median(image[mask], axis=0))
+    return b, g, r
 
 
 def _disc(radius: int) -> np.ndarray:

@@ -202,6 +202,9 @@ def iter_frames(
                 lookalikes=int(rng.integers(3, 7)) if kind == "lookalike" else int(rng.integers(3)),
                 lookalike_kinds=LOOKALIKE_KINDS,
                 pad_visible=kind != "lookalike",
+                # Look-alikes painted like this pad's H and as big: the hard negatives.
+                lookalike_bgr=reference.paint_bgr,
+                h_size_m=reference.h_size_m,
             )
             scene = ((kind, block), sc)
         current = scene[1]
@@ -297,7 +300,13 @@ def _texture(reference: Reference, kind: str, rng: np.random.Generator):
             continue
         if layout_distance(geom.h_corners_m, reference.corners_m) >= MIN_LAYOUT_DISTANCE:
             img = make_pad_image(
-                PAD_PICTURE_PX, h_width=width, h_height=height, leg_width=leg, crossbar_height=bar
+                PAD_PICTURE_PX,
+                h_width=width,
+                h_height=height,
+                leg_width=leg,
+                crossbar_height=bar,
+                board_bgr=_bgr(reference.board_bgr),
+                paint_bgr=_bgr(reference.paint_bgr),
             )
             return img, reference.pad_size_m
     # A stretched pad (also when no drawn H differed enough from an unusual reference).
@@ -306,3 +315,8 @@ def _texture(reference: Reference, kind: str, rng: np.random.Generator):
         factor = 1.0 / factor  # squeezed: widen the other way
     img = stretched_texture(reference.image, factor, float(rng.uniform(0.0, 180.0)))
     return img, reference.pad_size_m * img.shape[1] / reference.image.shape[1]
+
+
+def _bgr(colour: tuple[float, float, float]) -> tuple[int, int, int]:
+    b, g, r = (round(float(v)) for v in colour)
+    return b, g, r
