@@ -30,6 +30,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--plot", metavar="DIR", help="write the sweep's PNG plots here")
     parser.add_argument("--report", metavar="DIR", help="the dissertation's experiments")
     parser.add_argument("--quick", action="store_true", help="report: fewer frames (a smoke run)")
+    parser.add_argument(
+        "--hint",
+        action="store_true",
+        help="give the pipeline the camera's attitude (a little off), as a vehicle would",
+    )
+    parser.add_argument(
+        "--track", action="store_true", help="a descent over the pad, tracked frame to frame"
+    )
     args = parser.parse_args(argv)
     if args.frames is not None and args.frames <= 0:
         parser.error("--frames must be positive")
@@ -49,6 +57,10 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _dispatch(args: argparse.Namespace, methods: list[str]) -> dict:
+    if args.track:
+        from pipeline.bench.track import run_track
+
+        return run_track(frames=args.frames or 60, seed=args.seed, design=args.design or "default")
     if args.report:
         from pipeline.bench.report import write_report
 
@@ -69,12 +81,15 @@ def _dispatch(args: argparse.Namespace, methods: list[str]) -> dict:
             degrade=args.degrade,
             method=DEFAULT_METHOD if DEFAULT_METHOD in methods else methods[0],
             plot_dir=args.plot,
+            hint=args.hint,
         )
     frames = args.frames or 200
     if args.design is None:
-        return accuracy.run(frames, args.seed, methods, degrade=args.degrade)
+        return accuracy.run(frames, args.seed, methods, degrade=args.degrade, hint=args.hint)
     names = accuracy.design_names(args.design)
-    return accuracy.run_designs(names, frames, args.seed, methods, degrade=args.degrade)
+    return accuracy.run_designs(
+        names, frames, args.seed, methods, degrade=args.degrade, hint=args.hint
+    )
 
 
 if __name__ == "__main__":

@@ -20,6 +20,7 @@ import numpy as np
 
 from pipeline import Camera, Reference, process_frame
 from pipeline.bench.frames import SCENE_EVERY, altitude_for, make_scenes, make_view
+from pipeline.bench.hint import NOISE_DEG, gravity_hint
 from pipeline.bench.markers import ArucoDetector
 from pipeline.bench.tally import Tally, ratio, stats
 from pipeline.preprocess import DEFAULT_METHOD
@@ -28,7 +29,13 @@ from pipeline.render.view import render_view
 
 
 def run(
-    frames: int, seed: int, methods: list[str], *, design: str = "default", degrade: str = "today"
+    frames: int,
+    seed: int,
+    methods: list[str],
+    *,
+    design: str = "default",
+    degrade: str = "today",
+    hint: bool = False,
 ) -> dict:
     """One design's figures (the bench's keys since the start, plus the design's)."""
     cv2.setNumThreads(1)
@@ -59,7 +66,8 @@ def run(
                 continue
             t0 = time.perf_counter()
             # No yaw hint: a symmetric pad's twin counts as right, see Tally.score.
-            res = process_frame(frame, reference, camera, method=method)
+            g = gravity_hint(view.R_pad_cam, [seed, i, 11]) if hint else None
+            res = process_frame(frame, reference, camera, method=method, gravity_hint=g)
             tally.time(time.perf_counter() - t0, res.timings_ms)
             tally.score(res.detected and res.pose is not None, res.pose, view, d.symmetric)
             fp = process_frame(empty, reference, camera, method=method)
@@ -93,14 +101,21 @@ def run(
     if not d.symmetric:
         out["twin_rate"] = ours[main].twins / max(ours[main].detected, 1)
     out["degrade"] = degrade
+    out["attitude_hint_deg"] = NOISE_DEG if hint else None
     return out
 
 
 def run_designs(
-    names: list[str], frames: int, seed: int, methods: list[str], *, degrade: str = "today"
+    names: list[str],
+    frames: int,
+    seed: int,
+    methods: list[str],
+    *,
+    degrade: str = "today",
+    hint: bool = False,
 ) -> dict:
     """Every named design's figures and a summary over them."""
-    per = {n: run(frames, seed, methods, design=n, degrade=degrade) for n in names}
+    per = {n: run(frames, seed, methods, design=n, degrade=degrade, hint=hint) for n in names}
     return {
         "designs": per,
         "summary": summarise(per),

@@ -27,6 +27,7 @@ import numpy as np
 
 from pipeline import Camera, Reference, process_frame
 from pipeline.bench.frames import SCENE_EVERY, Scenes, make_scenes, make_view
+from pipeline.bench.hint import NOISE_DEG, gravity_hint
 from pipeline.bench.markers import AprilTagDetector, ArucoDetector, settings
 from pipeline.bench.plot import line_panel, save
 from pipeline.bench.tally import Tally
@@ -77,8 +78,10 @@ def run_sweep(
     degrade: str = "today",
     method: str = DEFAULT_METHOD,
     plot_dir: str | None = None,
+    hint: bool = False,
 ) -> dict:
-    """The sweep's JSON (see the module docstring); PNG plots into ``plot_dir``."""
+    """The sweep's JSON (see the module docstring); PNG plots into ``plot_dir``.
+    ``hint``: Visland gets the camera's attitude as a vehicle would give it."""
     if kind not in _X_KEY:
         raise ValueError(f"sweep must be one of {tuple(_X_KEY)}, got {kind!r}")
     if frames <= 0:
@@ -100,6 +103,7 @@ def run_sweep(
         "seed": seed,
         "hfov_deg": 60.0,
         "method": method,
+        "attitude_hint_deg": NOISE_DEG if hint else None,
         "reference_error": ref_error,
         "markers": settings(),
         "resolutions": {},
@@ -121,7 +125,8 @@ def run_sweep(
                 scenes = pool[slot]
                 view, noise_seed = make_view([seed, p, j, 11], camera, d, degrade, **_fix(kind, x))
                 frame = render_view(scenes.pad, camera, view, np.random.default_rng(noise_seed))
-                _visland(tallies["visland"], frame, reference, camera, view, d, method)
+                g = gravity_hint(view.R_pad_cam, [seed, p, j, 12]) if hint else None
+                _visland(tallies["visland"], frame, reference, camera, view, d, method, g)
                 for name, det in detectors.items():
                     img = render_view(
                         scenes.markers[name], camera, view, np.random.default_rng(noise_seed)
@@ -162,12 +167,12 @@ def _fix(kind: str, x: float) -> dict:
     return {"min_tilt_deg": x, "max_tilt_deg": x}
 
 
-def _visland(tally, frame, reference, camera, view, design, method) -> None:
+def _visland(tally, frame, reference, camera, view, design, method, hint=None) -> None:
     if reference is None:
         tally.score(False, None, view, design.symmetric)
         return
     t0 = time.perf_counter()
-    res = process_frame(frame, reference, camera, method=method)
+    res = process_frame(frame, reference, camera, method=method, gravity_hint=hint)
     tally.time(time.perf_counter() - t0, {})
     tally.score(res.detected and res.pose is not None, res.pose, view, design.symmetric)
 

@@ -132,3 +132,18 @@ def test_report_writes_markdown_and_figures(tmp_path) -> None:
     top = adaptive["points"][-1]
     assert top["detection_rate"] == 1.0 and top["hu1"]["median"] < 1e-3
     assert {row["agree"] for row in out["comparison"]} <= {"yes", "no", "partly", "-"}
+
+
+def test_attitude_hint_and_tracking_runs(capsys) -> None:
+    from pipeline.bench.track import run_track
+
+    out = run_designs(["default"], 3, 0, [DEFAULT_METHOD], hint=True)
+    assert out["designs"]["default"]["attitude_hint_deg"] > 0
+    track = run_track(frames=4, seed=0)
+    for res in ("640x480", "1920x1080"):
+        r = track[res]
+        assert set(r["found_by"]) <= {"track", "search", "missed"}
+        assert sum(r["found_by"].values()) == 4
+        assert r["ms_cold"]["median"] > 0
+    # A descent tracked from its second frame on.
+    assert track["640x480"]["found_by"].get("track", 0) >= 2
