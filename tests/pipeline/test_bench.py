@@ -139,11 +139,11 @@ def test_attitude_hint_and_tracking_runs(capsys) -> None:
 
     out = run_designs(["default"], 3, 0, [DEFAULT_METHOD], hint=True)
     assert out["designs"]["default"]["attitude_hint_deg"] > 0
-    track = run_track(frames=4, seed=0)
+    track = run_track(frames=12, seed=0)
     for res in ("640x480", "1920x1080"):
         r = track[res]
         assert set(r["found_by"]) <= {"track", "search", "missed"}
-        assert sum(r["found_by"].values()) == 4
+        assert sum(r["found_by"].values()) == 12
         assert r["ms_cold"]["median"] > 0
-    # A descent tracked from its second frame on.
-    assert track["640x480"]["found_by"].get("track", 0) >= 2
+    # Most of a descent is tracked from frame to frame.
+    assert track["640x480"]["found_by"].get("track", 0) >= 8
