@@ -102,7 +102,9 @@ def find(
     its place between two frames), so the comparisons with the reference
     picture, there to turn down look-alikes at first sight, are skipped.
     """
-    binary = binarize_channel(to_channel(image, reference.projection), method)
+    projection = reference.projection
+    dark = projection.is_gray and projection.polarity == "dark"
+    binary = binarize_channel(to_channel(image, projection), method, dark=dark)
     stages.lap("preprocess")
     area = float(image.shape[0] * image.shape[1])
     found = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=0.5 * area)

@@ -27,6 +27,7 @@ from pipeline.reference import SEARCH_WIDTH_PX, Reference
 from pipeline.result import FrameResult
 from pipeline.view import View
 
+FALLBACK_METHOD = "shadow"  # tried when the default threshold finds nothing
 TRACK_SPAN_PX = 100.0  # a tracked H is looked for at a scale where it spans about this
 TRACK_REACH = 0.5  # the tracking window: the pad's last box grown by this much of its size
 
@@ -104,14 +105,20 @@ def process_frame(
     tally = Tally()
     search = View.whole(image.shape, SEARCH_WIDTH_PX)
     mask = None
-    for way, view in (("track", _tracking_view(prior, reference, image.shape)), ("search", search)):
+    # Where to look and how: around the last detection, then the whole frame,
+    # then the whole frame again with the threshold that holds across shadows.
+    tries = [("track", _tracking_view(prior, reference, image.shape), method)]
+    tries.append(("search", search, method))
+    if method == DEFAULT_METHOD:
+        tries.append(("search", search, FALLBACK_METHOD))
+    for way, view, how in tries:
         if view is None:
             continue
         hit, binary = find(
             view.image(image),
             reference,
             view.camera(cam),
-            method=method,
+            method=how,
             verifier=verifier,
             tally=tally,
             stages=stages,

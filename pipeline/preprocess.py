@@ -13,6 +13,11 @@ axis for a white H on an orange disc). Three thresholding methods, all selectabl
 ``"otsu"``
     Gaussian smoothing (for the sensor noise) and Otsu's global threshold,
     which adapts to exposure but not to light that changes across the frame.
+``"shadow"``
+    The local mean threshold on the logarithm of the light: a shadow scales
+    the light, which the logarithm turns into an offset the local mean takes
+    out, so the H stays whole across a shadow's edge. ``process_frame`` tries
+    it when the default finds nothing.
 ``"adaptive"``
     Gaussian smoothing and a local mean threshold (41 px blocks): only what is
     clearly brighter than its surroundings, like paint on a dark board, stays
@@ -31,7 +36,7 @@ import numpy as np
 
 from pipeline.colour import GRAY, Projection
 
-METHODS = ("adaptive", "otsu", "seed")
+METHODS = ("adaptive", "otsu", "seed", "shadow")
 DEFAULT_METHOD = "adaptive"
 WORK_WIDTH = 640  # the seed's working resolution: 640 x 480
 
@@ -106,6 +111,8 @@ def has_colour(image_bgr: np.ndarray) -> bool:
 
 def to_channel(image_bgr: np.ndarray, projection: Projection = GRAY) -> np.ndarray:
     """The frame on the reference's channel (uint8): its H bright, its board dark."""
+    if image_bgr.ndim == 2:
+        return projection.apply_gray(image_bgr)
     if not has_colour(image_bgr):
         return projection.apply_gray(image_bgr[..., 0].copy())
     return projection.apply(image_bgr)
@@ -115,6 +122,16 @@ def smooth_channel(image_bgr: np.ndarray, projection: Projection = GRAY) -> np.n
     """The frame on ``projection``'s channel, smoothed for the sensor noise (as
     `binarize` smooths it before thresholding)."""
     return _smooth(to_channel(image_bgr, projection))
+
+
+def _log_light(channel: np.ndarray, dark: bool) -> np.ndarray:
+    """The channel on a log scale of the light (uint8); ``dark``: the channel is
+    inverted luma (a dark H made bright), whose light is 255 minus it."""
+    scale = 255.0 / np.log(256.0)
+    if dark:
+        light = 255.0 - channel.astype(np.float32)
+        return (255.0 - scale * np.log1p(light)).astype(np.uint8)
+    return (scale * np.log1p(channel.astype(np.float32))).astype(np.uint8)
 
 
 def _smooth(channel: np.ndarray) -> np.ndarray:
@@ -128,8 +145,13 @@ def binarize(
     return binarize_channel(to_channel(image_bgr, projection), method)
 
 
-def binarize_channel(gray: np.ndarray, method: str = DEFAULT_METHOD) -> Binarized:
-    """Threshold one channel (uint8) in which the marks to find are bright."""
+def binarize_channel(
+    gray: np.ndarray, method: str = DEFAULT_METHOD, *, dark: bool = False
+) -> Binarized:
+    """Threshold one channel (uint8) in which the marks to find are bright.
+
+    ``dark``: the channel is inverted luma (for "shadow", which works on the light).
+    """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
     smooth = _smooth(gray)
@@ -138,6 +160,11 @@ def binarize_channel(gray: np.ndarray, method: str = DEFAULT_METHOD) -> Binarize
     elif method == "adaptive":
         mask = cv2.adaptiveThreshold(
             smooth, 255, cv2.ADAPTIVE_THRESH_MEAN_C, cv2.THRESH_BINARY, 41, -12
+        )
+        t = float("nan")
+    elif method == "shadow":
+        mask = cv2.adaptiveThreshold(
+            _log_light(smooth, dark), 255, cv2.ADAPTIVE_THRESH_MEAN_C, cv2.THRESH_BINARY, 41, -8
         )
         t = float("nan")
     else:
