@@ -26,7 +26,7 @@ from pipeline.reference import H_CORNERS, Reference
 from pipeline.shapes import Region, douglas_peucker, polygon_corners, upsampled_contour
 
 MIN_H_AREA_PX = 24.0  # smaller regions carry too few pixels for an H
-MIN_H_SPAN_PX = 12.0  # nor can an H narrower than this be told from a blob of texture
+MIN_H_SPAN_PX = 8.0  # an H narrower than this is not looked for (see find.SMALL_H_PX)
 MIN_SHAPE_IOU = 0.4  # whitened overlap with the reference's H (look-alikes rank below)
 MAX_SHAPE_RESIDUAL = 0.1  # CSS corners: homography RMS / sqrt(area) (real H < 0.05)
 MIN_H_SUPPORT = 0.6  # share of the H's sides found on the channel's edges

@@ -25,6 +25,7 @@ from pipeline.candidates import (
     locate_all,
 )
 from pipeline.homography_fit import apply_h
+from pipeline.measure import whole_pad
 from pipeline.preprocess import Binarized, binarize_channel, to_channel
 from pipeline.reference import Reference
 from pipeline.shapes import regions
@@ -33,6 +34,7 @@ from pipeline.template import compare
 
 MIN_TEMPLATE_NCC = 0.4  # with the reference picture around the H
 BOARD_TOLERANCE = 0.2  # the board's brightness relative to the H's, against the reference's
+SMALL_H_PX = 14.0  # an H this small counts only with the rest of its pad found
 MAX_HUE = 0.3  # the board's chromaticity, L1 distance to the reference's
 
 
@@ -145,6 +147,11 @@ def _check(
     )
     if hit.evidence < MIN_EVIDENCE or not blob >= MIN_BLOB_SEPARATION:
         return "unclear"
+    span = float(np.ptp(hit.corners, axis=0).max())
+    if span < SMALL_H_PX and whole_pad(hit.fit.H, reference, binary.smooth) is hit.fit.H:
+        # A few pixels of H-shaped texture are everywhere: so small, the H is the
+        # pad's only where the rest of the pad (its rim, bars, rings) is found too.
+        return "unframed"
     if not full:
         return ""
     seen = compare(

@@ -80,7 +80,7 @@ def measure(
         if refit is not None:
             Hv = refit.H
     cam = view.camera(camera)
-    whole = _whole_pad(Hv, reference, smooth)
+    whole = whole_pad(Hv, reference, smooth)
     # With the pad's other marks found, or a lens whose distortion the
     # homography cannot follow, the pose is refined on the edges.
     polish = whole is not Hv or cam.has_distortion
@@ -105,7 +105,7 @@ def _covers(found: View, need: View) -> bool:
     return inside and found.scale >= need.scale - 1e-9
 
 
-def _whole_pad(H: np.ndarray, reference: Reference, smooth: np.ndarray) -> np.ndarray:
+def whole_pad(H: np.ndarray, reference: Reference, smooth: np.ndarray) -> np.ndarray:
     """The homography refitted on the edges of the whole pad, when they are found.
 
     The H alone pins the plane's tilt poorly: its corners, a few tens of pixels
@@ -113,7 +113,8 @@ def _whole_pad(H: np.ndarray, reference: Reference, smooth: np.ndarray) -> np.nd
     (a ring, a rim, bars) lie farther out; seen from the H's homography they may
     be several pixels off, so they are searched for widely first. Kept when
     most of the marks' edges are found and it still puts the H where it was.
-    An H over ``SELF_SUFFICIENT_PX`` pins the pose by itself.
+    An H over ``SELF_SUFFICIENT_PX`` pins the pose by itself. Returns ``H``
+    itself (the same object) when the marks were not found or not looked for.
     """
     model = reference.marks_model
     span = float(np.ptp(apply_h(H, reference.corners_m), axis=0).max())
