@@ -284,6 +284,11 @@ def _decompose(B: np.ndarray, q: np.ndarray) -> list[EgoSolution]:
     scale = max(1.0, float(np.abs(B).max()))
     if s1 - s3 <= 1e-12 * scale:  # no translation: the normal is not observable
         return [EgoSolution(_vee(B), np.zeros(3), None)]
+    # a translation along the normal has one non-zero eigenvalue: the other is noise
+    if -s3 < 1e-8 * s1:
+        s3 = 0.0
+    elif s1 < 1e-8 * -s3:
+        s1 = 0.0
     u1, u3 = evecs[:, 2], evecs[:, 0]
     p = np.sqrt(s1 / 2.0) * u1
     r = np.sqrt(-s3 / 2.0) * u3

@@ -418,8 +418,8 @@ class SitlObserver:
 
     It connects to ``url`` (retrying until it listens: SERIAL1/2 open only after
     SERIAL0 has a client), reconnects after a reboot, asks for
-    :data:`OBSERVER_RATES_HZ` and never commands the vehicle. It sends nothing but
-    those requests and what a caller passes to :meth:`send` (e.g. a vision stand-in's
+    :data:`OBSERVER_RATES_HZ`. It sends nothing but those requests and what a caller
+    passes to :meth:`send` or :meth:`command` (e.g. a vision stand-in's
     VISION_POSITION_ESTIMATE), as system ``source_system``.
     """
 
@@ -534,10 +534,16 @@ class SitlObserver:
         return found[0] if self.wait(match, timeout) else None
 
     def wait_message(
-        self, mtype: str, timeout: float, where: Callable[[Any], bool] = lambda m: True
+        self,
+        mtype: str,
+        timeout: float,
+        where: Callable[[Any], bool] = lambda m: True,
+        *,
+        since: float | None = None,
     ) -> Any:
-        """The next ``mtype`` received after this call for which ``where`` holds."""
-        t0 = time.monotonic()
+        """The latest ``mtype`` received after ``since`` (default: this call) for which
+        ``where`` holds, waiting up to ``timeout`` seconds; None if none came."""
+        t0 = time.monotonic() if since is None else since
         got: list[Any] = []
 
         def fresh() -> bool:
@@ -592,6 +598,25 @@ class SitlObserver:
                 return False
             self._mav.seq = (self._mav.seq + 1) % 256
         return True
+
+    def command(self, command_id: int, params: tuple[float, ...], timeout: float) -> int | None:
+        """Send COMMAND_LONG and wait for its COMMAND_ACK; the MAV_RESULT, or None.
+
+        For the test rig's own commands (e.g. MAV_CMD_SET_EKF_SOURCE_SET from a
+        vision stand-in); the ground station under test uses its own link.
+        """
+        p = [float(v) for v in params] + [0.0] * (7 - len(params))
+        t0 = time.monotonic()
+        msg = mavlink2.MAVLink_command_long_message(1, 1, command_id, 0, *p)
+        if not self.send(msg):
+            return None
+        ack = self.wait_message(
+            "COMMAND_ACK",
+            timeout,
+            lambda m: m.command == command_id and m.target_system in (0, self._source[0]),
+            since=t0,
+        )
+        return None if ack is None else int(ack.result)
 
     def request_streams(self, names: list[str] | None = None) -> None:
         """(Re)ask for :data:`OBSERVER_RATES_HZ` (or just ``names``) on this port."""
