@@ -449,6 +449,7 @@ class SitlObserver:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.connections = 0
+        self.epoch_texts = 0  # index of the first STATUSTEXT of the current connection
         self.bad_data = 0
         self.started_at = time.monotonic()
 
@@ -663,6 +664,13 @@ class SitlObserver:
                 self._stop.wait(0.1)
                 continue
             sock.settimeout(0.2)
+            with self._cond:
+                # SITL drops its TCP clients only when it reboots: what came before
+                # belongs to the previous boot.
+                self._latest.clear()
+                self._first.clear()
+                self._boot_ms = None
+                self.epoch_texts = len(self._texts)
             with self._send_lock:
                 self._sock = sock
             self.connections += 1
@@ -744,7 +752,8 @@ class Readiness:
 
 def wait_ready(observer: SitlObserver, *, timeout: float, since: float | None = None) -> Readiness:
     """Wait until the vehicle can fly on GPS: a heartbeat, "EKF3 IMU0 origin set",
-    "EKF3 IMU0 is using GPS" and a LOCAL_POSITION_NED after it.
+    "EKF3 IMU0 is using GPS" and a LOCAL_POSITION_NED after it, all since the
+    observer's latest (re)connection (a reboot starts over).
 
     ``since``: the monotonic time to measure from (default: the observer's start).
     Raises :class:`SitlError` naming what did not come within ``timeout`` seconds.
@@ -758,10 +767,10 @@ def wait_ready(observer: SitlObserver, *, timeout: float, since: float | None = 
     if not observer.wait(lambda: "HEARTBEAT" in observer._latest, left()):
         raise SitlError(f"no HEARTBEAT within {timeout:g} s")
     hb = observer.first_seen("HEARTBEAT")
-    origin = observer.wait_text(r"EKF3 IMU0 origin set", left())
+    origin = observer.wait_text(r"EKF3 IMU0 origin set", left(), since=observer.epoch_texts)
     if origin is None:
         raise SitlError(f"no 'EKF3 IMU0 origin set' within {timeout:g} s")
-    gps = observer.wait_text(r"EKF3 IMU0 is using GPS", left())
+    gps = observer.wait_text(r"EKF3 IMU0 is using GPS", left(), since=observer.epoch_texts)
     if gps is None:
         raise SitlError(f"no 'EKF3 IMU0 is using GPS' within {timeout:g} s")
     if not observer.wait(lambda: "LOCAL_POSITION_NED" in observer._latest, left()):
