@@ -24,20 +24,15 @@ import json
 import math
 import statistics
 import sys
-import threading
 from typing import Any
-
-import numpy as np
-from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from backend.link import VehicleLink
 from sim.sitl import Sitl, SitlError, SitlObserver, find_sitl_dir, wait_ready
+from sim.vision_feed import VisionStandIn
 
 MAV_CMD_SET_EKF_SOURCE_SET = 42007
 PAD_NE = (3.0, 2.0)  # metres from the EKF origin
 ALT_M = 5.0
-_NAN_COV21 = [math.nan] + [0.0] * 20
-_NAN_COV9 = [math.nan] + [0.0] * 8
 
 VISION_PARAMS: dict[str, float] = {
     "VISO_TYPE": 1,
@@ -46,63 +41,6 @@ VISION_PARAMS: dict[str, float] = {
     "EK3_SRC2_POSZ": 1,
     "EK3_SRC2_YAW": 1,
 }
-
-
-class VisionStandIn:
-    """Sends the vehicle's true position as VISION_POSITION_ESTIMATE (+ speed) on each
-    SIM_STATE the observer receives (so at a rate of simulated, not wall, time)."""
-
-    def __init__(
-        self,
-        observer: SitlObserver,
-        origin: tuple[float, float, float],
-        *,
-        noise_m: float,
-        speed: bool,
-        seed: int,
-    ) -> None:
-        self.observer = observer
-        self.origin = origin
-        self.noise_m = noise_m
-        self.speed = speed
-        self.sent = 0
-        self.on = threading.Event()
-        self.on.set()
-        self._rng = np.random.default_rng(seed)
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="vision-stand-in", daemon=True)
-
-    def start(self) -> VisionStandIn:
-        self._thread.start()
-        return self
-
-    def close(self) -> None:
-        self._stop.set()
-        self._thread.join(3.0)
-
-    def _run(self) -> None:
-        obs = self.observer
-        while not self._stop.is_set():
-            if obs.wait_message("SIM_STATE", 0.5) is None or not self.on.is_set():
-                continue
-            truth = obs.truth(self.origin)
-            boot = obs.boot_s
-            if truth is None or boot is None:
-                continue
-            usec = int(boot * 1e6)  # the vehicle's clock: the frame's capture time
-            n, e, d = np.asarray(truth.position_ned) + self._rng.normal(0, self.noise_m, 3)
-            obs.send(
-                mavlink2.MAVLink_vision_position_estimate_message(
-                    usec, n, e, d, truth.roll, truth.pitch, truth.yaw, _NAN_COV21, 0
-                )
-            )
-            if self.speed:
-                obs.send(
-                    mavlink2.MAVLink_vision_speed_estimate_message(
-                        usec, *truth.velocity_ned, _NAN_COV9, 0
-                    )
-                )
-            self.sent += 1
 
 
 def _wait_sim(obs: SitlObserver, seconds: float, timeout: float = 120.0) -> None:

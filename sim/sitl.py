@@ -667,10 +667,7 @@ class SitlObserver:
             with self._cond:
                 # SITL drops its TCP clients only when it reboots: what came before
                 # belongs to the previous boot.
-                self._latest.clear()
-                self._first.clear()
-                self._boot_ms = None
-                self.epoch_texts = len(self._texts)
+                self._new_epoch()
             with self._send_lock:
                 self._sock = sock
             self.connections += 1
@@ -705,6 +702,13 @@ class SitlObserver:
                         self.request_streams(missing)
             self._close_socket()
 
+    def _new_epoch(self) -> None:
+        # under self._cond
+        self._latest.clear()
+        self._first.clear()
+        self._boot_ms = None
+        self.epoch_texts = len(self._texts)
+
     def _take(self, msgs: list[Any], now: float) -> None:
         with self._cond:
             for msg in msgs:
@@ -716,6 +720,8 @@ class SitlObserver:
                     continue
                 boot = getattr(msg, "time_boot_ms", None)
                 if boot is not None:
+                    if self._boot_ms is not None and boot < self._boot_ms - 1000:
+                        self._new_epoch()  # the clock went back: a reboot on this link
                     self._boot_ms = int(boot)
                 self._latest[mtype] = (now, msg)
                 if mtype not in self._first:

@@ -19,6 +19,7 @@ from typing import Any
 import pytest
 
 from backend.link import VehicleLink
+from backend.sim.vehicle import SimConfig, SimVehicle, VehicleServer
 from sim.sitl import Sitl, SitlObserver, default_speedup, find_sitl_dir, wait_ready
 
 SITL_DIR = find_sitl_dir()
@@ -27,10 +28,30 @@ requires_sitl = pytest.mark.skipif(
 )
 
 
-class Flight:
-    """One SITL with the project's VehicleLink on SERIAL0 and an observer on SERIAL2."""
+class StandIn:
+    """The project's ArduCopter stand-in served like SITL: one TCP port for every client,
+    SITL's timeline (``ready_after_scale`` 1), free-running at ``speedup``."""
 
-    def __init__(self, sitl: Sitl) -> None:
+    def __init__(self, *, speedup: float = 10.0, seed: int = 0) -> None:
+        self.speedup = speedup
+        self.server = VehicleServer(
+            SimVehicle(SimConfig(seed=seed)), "tcp:127.0.0.1:0", speedup=speedup
+        )
+
+    def start(self) -> StandIn:
+        self.server.start()
+        self.url = self.serial1_url = self.serial2_url = self.server.address
+        return self
+
+    def stop(self) -> None:
+        self.server.stop()
+
+
+class Flight:
+    """A vehicle (SITL or the stand-in) with the project's VehicleLink on SERIAL0 and an
+    observer on SERIAL2."""
+
+    def __init__(self, sitl: Sitl | StandIn) -> None:
         self.sitl = sitl
         self.speedup = sitl.speedup
         self.link = VehicleLink(sitl.url)
@@ -153,8 +174,13 @@ class Flight:
             self.wait_ready()
 
 
-def start_flight() -> tuple[Sitl, Flight]:
-    sitl = Sitl(speedup=default_speedup()).start()
+def start_flight(kind: str = "sitl") -> tuple[Sitl | StandIn, Flight]:
+    """Start a vehicle of ``kind`` ("sitl" or "standin") and connect to it."""
+    sitl: Sitl | StandIn
+    if kind == "sitl":
+        sitl = Sitl(speedup=default_speedup()).start()
+    else:
+        sitl = StandIn(speedup=default_speedup()).start()
     try:
         return sitl, Flight(sitl).start()
     except BaseException:
