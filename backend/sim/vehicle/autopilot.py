@@ -631,7 +631,6 @@ class SimVehicle(FlightModes):
         self.mode = new
         self._enter_mode(new)
         self._text(SEV_CRITICAL, f"EKF Failsafe: changed to {MODE_NAMES[new]} Mode")
-        self._text(SEV_INFO, "EKF3 IMU0 stopped aiding")
 
     def _run_precland(self) -> None:
         """AC_PrecLand::update: the estimator (backend and PLND_ENABLED), then the

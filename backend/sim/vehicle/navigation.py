@@ -11,7 +11,8 @@ Measured on ArduCopter 4.5.6 SITL (notes/sitl-findings.md) and kept here:
 - when the active source stops (SIM_GPS_DISABLE = 1 on a GPS set, the vision stream
   ending on an ExternalNav set) the EKF dead-reckons: the estimate drifts for about
   8 s, then "EKF variance" and the position is lost (no more LOCAL_POSITION_NED);
-  the autopilot's EKF failsafe then lands (see `autopilot`).
+  the autopilot's EKF failsafe then lands (see `autopilot`); "EKF3 IMU0 stopped
+  aiding" follows ~15 s after the source went.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from backend.sim.vehicle.physics import Vec3
 GPS, EXTNAV = 3, 6  # EK3_SRCn_POSXY values
 VISION_HEALTHY_S = 0.3  # AP_VisualOdom: data within this long is healthy
 DEAD_RECKONING_S = 8.0  # measured: GPS or vision gone -> "EKF variance" ~8 s later
+STOP_AIDING_S = 15.0  # measured: "EKF3 IMU0 stopped aiding" ~15 s after
 DRIFT_ACCEL = 0.03  # m/s^2: the dead-reckoned estimate's error grows like this
 VISION_SMOOTH_S = 0.2  # time constant of the estimate following the vision position
 
@@ -64,6 +66,7 @@ class Navigation:
         self.using: int | None = None  # the POSXY source being fused now
         self.dead_reckoning_since: float | None = None
         self.lost = False
+        self._stopped_aiding = False
         self._drift_dir = (1.0, 0.0)
 
     # ------------------------------------------------------------------ inputs
@@ -136,12 +139,16 @@ class Navigation:
             if since >= DEAD_RECKONING_S:
                 self.lost = True
                 texts.append("EKF variance")
+        elif since >= STOP_AIDING_S and not self._stopped_aiding:
+            self._stopped_aiding = True
+            texts.append("EKF3 IMU0 stopped aiding")
         return texts
 
     def _start_using(self, source: int, truth: Vec3, t: float, texts: list[str]) -> None:
         was_lost = self.lost
         self.using = source
         self.lost = False
+        self._stopped_aiding = False
         self.dead_reckoning_since = None
         if source == EXTNAV and self.vision is not None:
             # EKF3 resets its position to the new source's on a switch
