@@ -450,6 +450,8 @@ class SitlObserver:
         self._thread: threading.Thread | None = None
         self.connections = 0
         self.epoch_texts = 0  # index of the first STATUSTEXT of the current connection
+        # ArduPilot sends STATUSTEXTs only on ports it has heard from: when we first spoke
+        self.active_since: float | None = None
         self.bad_data = 0
         self.started_at = time.monotonic()
 
@@ -668,6 +670,7 @@ class SitlObserver:
                 # SITL drops its TCP clients only when it reboots: what came before
                 # belongs to the previous boot.
                 self._new_epoch()
+                self.active_since = None
             with self._send_lock:
                 self._sock = sock
             self.connections += 1
@@ -700,6 +703,8 @@ class SitlObserver:
                     missing = self._missing_streams(connected_at, now)
                     if missing:
                         self.request_streams(missing)
+                        if self.active_since is None:
+                            self.active_since = now
             self._close_socket()
 
     def _new_epoch(self) -> None:

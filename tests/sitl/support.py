@@ -105,6 +105,15 @@ class Flight:
             10,
         )
 
+    def reboot(self) -> None:
+        """Reboot through the link; wait for the TCP drop (SITL) or the clock going back
+        (stand-in), the link coming back, and readiness since this boot."""
+        epoch = self.obs.epoch_texts
+        result = self.link.reboot()
+        assert result.ok, result.detail
+        assert self.obs.wait(lambda: self.obs.epoch_texts != epoch, self.wall(20)), "no reboot"
+        self.wait_ready()
+
     @property
     def ready(self) -> bool:
         """ "EKF3 IMU0 is using GPS" since the latest boot."""

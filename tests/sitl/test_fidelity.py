@@ -40,14 +40,6 @@ def texts_since(f: Flight, index: int) -> list[str]:
     return [t.text for t in f.obs.texts(index)]
 
 
-def reboot(f: Flight) -> None:
-    """Reboot and wait until flying on GPS is possible again."""
-    epoch = f.obs.epoch_texts
-    assert f.link.reboot().ok
-    assert f.obs.wait(lambda: f.obs.epoch_texts != epoch, f.wall(20)), "no reboot seen"
-    f.wait_ready()
-
-
 def true_alt(f: Flight, ground_d: float) -> float:
     return ground_d - f.true_ned()[2]
 
@@ -132,7 +124,7 @@ def test_precland_announces_found_init_and_lost_and_descends(vehicle: Flight) ->
     f.wait_ready()
     f.set_param("PLND_ENABLED", 1)
     f.set_param("PLND_TYPE", 1)
-    reboot(f)
+    f.reboot()
     start = f.true_ned()
     pad = (start[0] + 1.0, start[1] + 0.5, start[2])
     f.takeoff(6.0)
@@ -207,7 +199,7 @@ def _externalnav(f: Flight) -> VisionStandIn:
         ("EK3_SRC2_YAW", 1),
     ):
         f.set_param(name, value)
-    reboot(f)
+    f.reboot()
     f.mode("GUIDED")
     refused = f.link.arm()
     assert not refused.ok and "Arm: VisOdom: not healthy" in refused.reasons

@@ -49,10 +49,10 @@ def test_readiness_from_a_fresh_boot_with_refusals_verbatim(fresh_flight: Flight
     first_position = obs.first_seen("LOCAL_POSITION_NED")
     assert first_position is not None and first_position[0] >= using_gps.rx - 0.5
     # every reason, word for word, is a STATUSTEXT the vehicle sent (to the observer too,
-    # once it had connected: SERIAL2 opens only after the link's SERIAL0)
+    # once ArduPilot had heard from it: it sends texts only on ports that spoke to it)
     sent = {t.text for t in obs.texts()}
-    observed_from = obs.texts()[0].rx
-    checked = [r for r in refusals if r[3] > observed_from + 0.1]
+    assert obs.active_since is not None
+    checked = [r for r in refusals if r[3] > obs.active_since + 0.5]
     assert checked
     for _, reasons, _, _ in checked:
         for reason in reasons:
@@ -146,13 +146,9 @@ def test_reboot_drops_tcp_the_link_comes_back_and_plnd_type_takes_effect(flight:
     flight.set_param("PLND_ENABLED", 1)
     flight.set_param("PLND_TYPE", 1)
     reconnects = link.telemetry.reconnects
-    result = link.reboot()
-    assert result.ok, result.detail
-    assert link.wait_until(lambda t: t.state.value == "lost", flight.wall(5))
-    assert link.wait_until(lambda t: t.state.value == "up", flight.wall(20))
+    flight.reboot()
     assert link.telemetry.reconnects == reconnects + 1
     assert link.get_param("PLND_TYPE") == 1.0
-    flight.wait_ready()
     # the backend exists now: LANDING_TARGETs are taken ("PrecLand: Target Found")
     start = flight.true_ned()
     pad = (start[0] + 1.0, start[1] - 0.5)
