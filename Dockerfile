@@ -18,6 +18,8 @@ RUN pip install --no-cache-dir torch==2.13.0 --index-url https://download.pytorc
 COPY pyproject.toml README.md ./
 COPY backend/ backend/
 COPY pipeline/ pipeline/
+# The stand-in vehicle and simulated camera: started when no vehicle or camera is named.
+COPY sim/ sim/
 RUN pip install --no-cache-dir .
 COPY --from=frontend /src/frontend/dist frontend/dist
 RUN useradd --create-home --uid 1000 visland && mkdir /data && chown visland /data

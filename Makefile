@@ -7,7 +7,7 @@ NODE_STAMP := frontend/node_modules/.installed-stamp
 DIST := frontend/dist/index.html
 FRONTEND_SRC := $(shell find frontend/src -type f 2>/dev/null) frontend/index.html frontend/vite.config.ts frontend/tsconfig.json
 
-.PHONY: run test install frontend chromium lint format bench clean
+.PHONY: run test install frontend chromium lint types types-check format bench clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -37,15 +37,34 @@ chromium:
 run: install
 	$(BIN)/python -m backend serve
 
-test: install chromium
-	$(BIN)/ruff check .
-	$(BIN)/ruff format --check .
+test: install chromium lint
 	cd frontend && npm test --silent
 	$(BIN)/pytest
 
-lint: $(STAMP)
+# Style, the import contracts (pyproject.toml [tool.importlinter]), the types, and the
+# dashboard's protocol types up to date with the server's schemas.
+lint: $(STAMP) $(NODE_STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
+	$(BIN)/lint-imports --no-logo
+	$(BIN)/mypy
+	$(MAKE) --no-print-directory types-check
+
+# The dashboard's TypeScript types, generated from the server's OpenAPI document
+# (backend/api/schemas.py, backend/api/messages.py). Commit both files.
+OPENAPI := frontend/openapi.json
+API_TYPES := frontend/src/lib/api-types.ts
+types: $(STAMP) $(NODE_STAMP)
+	$(BIN)/python -m backend openapi $(OPENAPI)
+	cd frontend && npx --no-install openapi-typescript openapi.json -o src/lib/api-types.ts --silent
+
+# Fails when a schema changed and `make types` was not run (CI runs it via make lint).
+types-check: $(STAMP) $(NODE_STAMP)
+	@tmp=$$(mktemp -d) && trap 'rm -rf "$$tmp"' EXIT && \
+	$(BIN)/python -m backend openapi "$$tmp/openapi.json" && \
+	(cd frontend && npx --no-install openapi-typescript "$$tmp/openapi.json" -o "$$tmp/api-types.ts" --silent) && \
+	cmp -s "$$tmp/openapi.json" $(OPENAPI) && cmp -s "$$tmp/api-types.ts" $(API_TYPES) || \
+	{ echo "$(OPENAPI) or $(API_TYPES) is out of date with the server's schemas: run make types"; exit 1; }
 
 format: $(STAMP)
 	$(BIN)/ruff check --fix .
@@ -55,4 +74,4 @@ bench: install
 	$(BIN)/python -m pipeline.bench --frames 200 --seed 0
 
 clean:
-	rm -rf $(VENV) out .pytest_cache .ruff_cache frontend/node_modules frontend/dist
+	rm -rf $(VENV) out .pytest_cache .ruff_cache .mypy_cache .import_linter_cache frontend/node_modules frontend/dist

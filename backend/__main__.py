@@ -1,4 +1,4 @@
-"""``python -m backend serve``: run the ground station.
+"""``python -m backend serve``: run the ground station (``openapi``: write its API document).
 
 Every flag is also a ``VISLAND_*`` environment variable (a flag wins over the env).
 With no ``--mavlink`` the in-process ArduCopter stand-in flies; with no ``--camera``
@@ -60,7 +60,27 @@ def build_parser() -> argparse.ArgumentParser:
         help="viewing (GET, WebSocket) needs the token too",
     )
     serve.add_argument("--log-level", default="info", choices=["debug", "info", "warning"])
+    doc = sub.add_parser(
+        "openapi", help="write the OpenAPI document (no server is started): make types"
+    )
+    doc.add_argument("out", nargs="?", default="-", help="file to write (default: stdout)")
     return parser
+
+
+def write_openapi(out: str) -> int:
+    """The OpenAPI document as stable JSON text, to ``out`` ("-": stdout)."""
+    import json
+
+    from backend.app import create_app
+
+    app = create_app(Settings())
+    text = json.dumps(app.openapi(), indent=2, sort_keys=True, ensure_ascii=False) + "\n"
+    if out == "-":
+        sys.stdout.write(text)
+    else:
+        with open(out, "w", encoding="utf-8") as fh:
+            fh.write(text)
+    return 0
 
 
 def settings_from_args(args: argparse.Namespace) -> Settings:
@@ -86,6 +106,8 @@ def port_is_free(host: str, port: int) -> bool:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    if args.command == "openapi":
+        return write_openapi(args.out)
     try:
         settings = settings_from_args(args)
     except ValidationError as exc:
@@ -104,7 +126,7 @@ def main(argv: list[str] | None = None) -> int:
 
     import uvicorn
 
-    from backend.app import create_app
+    from backend.app import SERVER_OPTIONS, create_app
     from backend.viewer3d import browsable_host
 
     logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
@@ -125,7 +147,13 @@ def main(argv: list[str] | None = None) -> int:
             "commands still need the token"
         )
     print("\n".join(lines), flush=True)
-    uvicorn.run(app, host=settings.host, port=settings.port, log_level=args.log_level)
+    uvicorn.run(
+        app,
+        host=settings.host,
+        port=settings.port,
+        log_level=args.log_level,
+        **SERVER_OPTIONS,  # type: ignore[arg-type]
+    )
     return 0
 
 

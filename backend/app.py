@@ -1,9 +1,11 @@
-"""The FastAPI application: ``create_app(settings)`` builds it, the lifespan runs the station.
+"""The FastAPI application: ``create_app(settings)`` makes it, its lifespan runs the station.
 
-Routes live under ``/api`` (one router per resource), the WebSocket at ``/ws``, the
-OpenAPI docs at ``/docs`` and the built dashboard (``frontend/dist``) at ``/``. Every
-error is ``{"detail": "<sentence>"}``; invalid input is a 422 with a sentence, never
-a 500.
+The lifespan builds the station (``backend.station.build_station``) and starts it,
+off the event loop. Routes live under ``/api`` (one router per resource), the
+WebSocket at ``/ws``, the OpenAPI docs at ``/docs`` (the document, with the
+WebSocket's messages, from :mod:`backend.api.openapi`) and the built dashboard
+(``frontend/dist``) at ``/``. Every error is ``{"detail": "<sentence>"}``; invalid
+input is a 422 with a sentence, never a 500.
 """
 
 from __future__ import annotations
@@ -21,15 +23,22 @@ from fastapi.staticfiles import StaticFiles
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
+from backend.api.openapi import install_openapi
 from backend.api.routes import flights, health, missions, reference, status, telemetry, vehicle
 from backend.api.routes import settings as settings_routes
 from backend.api.ws import Hub
 from backend.settings import Settings, get_settings
-from backend.station import VERSION, Station
+from backend.station import VERSION, Station, build_station
 
 log = logging.getLogger(__name__)
 
 FRONTEND_DIST = Path(__file__).resolve().parent.parent / "frontend" / "dist"
+#: How uvicorn must serve the app (``python -m backend serve``, the tests, the benches).
+#: No per-message deflate on the WebSocket: its compressor is per connection, so every
+#: JPEG would be deflated once per viewer (for nothing: JPEG does not shrink) on the
+#: event loop, which then has no time left for the API.
+SERVER_OPTIONS: dict[str, object] = {"ws_per_message_deflate": False}
+
 # Multipart framing around the file: what an upload may carry beyond the file itself.
 _MULTIPART_SLACK = 64 * 1024
 
@@ -120,22 +129,28 @@ def _sentence(exc: RequestValidationError) -> str:
 
 
 def create_app(settings: Settings | None = None, *, station: Station | None = None) -> FastAPI:
-    """Build the app. The station starts with the app's lifespan and stops with it."""
+    """Make the app; the station (built here from ``settings`` unless given) runs with
+    the app's lifespan. Making the app starts nothing (``app.openapi()`` works alone)."""
     settings = settings or get_settings()
-    station = station or Station(settings)
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        # Starting opens sockets and threads (a second or so): keep the loop free.
-        await anyio.to_thread.run_sync(station.start)
-        hub = Hub(station)
+        # Building and starting open sockets and threads (a second or so): off the loop.
+        running: Station = (
+            station
+            if station is not None
+            else await anyio.to_thread.run_sync(build_station, settings)
+        )
+        await anyio.to_thread.run_sync(running.start)
+        app.state.station = running
+        hub = Hub(running)
         app.state.hub = hub
         await hub.start()
         try:
             yield
         finally:
             await hub.stop()
-            await anyio.to_thread.run_sync(station.stop)
+            await anyio.to_thread.run_sync(running.stop)
 
     app = FastAPI(
         title="Visland ground station",
@@ -143,7 +158,7 @@ def create_app(settings: Settings | None = None, *, station: Station | None = No
         description="Lands an ArduCopter on an 'H' helipad by machine vision.",
         lifespan=lifespan,
     )
-    app.state.station = station
+    app.state.station = None
     app.state.settings = settings
     app.add_middleware(UploadLimit, limit=settings.max_upload_bytes)
 
@@ -181,6 +196,8 @@ def create_app(settings: Settings | None = None, *, station: Station | None = No
     @app.websocket("/ws")
     async def websocket(ws: WebSocket) -> None:
         await app.state.hub.serve(ws)
+
+    install_openapi(app)
 
     if (FRONTEND_DIST / "index.html").is_file():
         app.mount("/", StaticFiles(directory=FRONTEND_DIST, html=True), name="dashboard")

@@ -35,3 +35,16 @@ def rot_ned_pad(pad_heading_deg: float) -> np.ndarray:
     y = [math.cos(psi), math.sin(psi), 0.0]
     z = [0.0, 0.0, -1.0]
     return np.column_stack([x, y, z])
+
+
+def camera_yaw_in_pad(pad_heading_deg: float, vehicle_yaw_rad: float) -> float:
+    """The down-looking camera's yaw in the pad frame (``pipeline.result.yaw_of``), degrees.
+
+    The camera's image top is the vehicle's nose, so its yaw is the pad's heading minus
+    the vehicle's (headings turn clockwise, the pad-frame yaw counter-clockwise).
+
+    >>> camera_yaw_in_pad(30.0, math.radians(50.0))
+    -20.0
+    """
+    yaw = float(pad_heading_deg) - math.degrees(float(vehicle_yaw_rad))
+    return (yaw + 180.0) % 360.0 - 180.0

@@ -9,142 +9,141 @@ the telemetry), or on demand. The folder::
         frames/000123.jpg the processed frames (when recording frames is on)
 
 ``t_unix`` in results.jsonl is the capture time on the UNIX clock, the clock of the
-.tlog timestamps, so frames, results and MAVLink messages line up on replay. Frames
-are written by a writer thread from a bounded queue; if the disk cannot keep up the
-overflow is counted, never waited for.
+.tlog timestamps, so frames, results and MAVLink messages line up on replay. The
+recorder is one consumer of the encoded-frame bus: its writer thread takes the newest
+frame from its slot (the JPEG and the result's JSON are the ones the viewers get);
+frames that come faster than the disk takes them are counted as ``dropped``, never
+waited for.
 """
 
 from __future__ import annotations
 
-import contextlib
-import json
 import logging
-import queue
 import shutil
 import struct
 import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import IO, Any
 
-import cv2
-
+from backend.encoder import EncodedFrame, splice
+from backend.framebus import FrameBus
 from backend.storage import Storage
-from backend.vision_worker import Processed
 
 log = logging.getLogger(__name__)
 
-_STOP = object()
+_JOIN_S = 5.0
 
 
 def utc_stamp(t: float) -> str:
     return time.strftime("%Y-%m-%dT%H-%M-%SZ", time.gmtime(t))
 
 
+class _Flight:
+    """The flight being recorded: its row, folder and open results file."""
+
+    def __init__(self, flight_id: int, folder: Path, started: float) -> None:
+        self.id = flight_id
+        self.dir = folder
+        self.started = started
+        self.results: IO[str] = (folder / "results.jsonl").open("a", buffering=1)
+        self.frames = 0
+
+    def info(self) -> dict[str, Any]:
+        return {"id": self.id, "dir": str(self.dir)}
+
+
 class Recorder:
-    """Records flights under ``root``; ``tlog_dir`` is where the link writes its tlogs."""
+    """Records flights under ``root``; ``tlog_dir`` is where the link writes its tlogs.
+
+    ``frames``: the encoded-frame bus it records from (its slot wants frames only while
+    a flight is recorded). ``record_frames``: whether JPEGs are kept (results always).
+    """
 
     def __init__(
         self,
         root: str | Path,
         storage: Storage,
+        frames: FrameBus[EncodedFrame],
         *,
         tlog_dir: str | Path | None,
         record_frames: Callable[[], bool] = lambda: True,
-        jpeg_quality: Callable[[], int] = lambda: 80,
-        on_event: Callable[[str, str, dict], None] | None = None,
-        queue_size: int = 64,
+        on_event: Callable[[str, str, dict[str, Any]], object] | None = None,
     ) -> None:
         self.root = Path(root)
         self.root.mkdir(parents=True, exist_ok=True)
         self._storage = storage
         self._tlog_dir = None if tlog_dir is None else Path(tlog_dir)
         self._record_frames = record_frames
-        self._jpeg_quality = jpeg_quality
         self._on_event = on_event
+        # Held while a frame is written: stop() waits for the one under way, never more.
         self._lock = threading.Lock()
-        self._queue: queue.Queue = queue.Queue(maxsize=queue_size)
-        self._current: dict | None = None
-        self._frames = 0
-        self.overflow = 0
-        self._thread = threading.Thread(target=self._writer, name="recorder", daemon=True)
-        self._thread.start()
+        self._current: _Flight | None = None
+        self._slot = frames.subscribe("recorder", wanted=lambda: self._current is not None)
+        self._thread: threading.Thread | None = None
+        self.written = 0
 
     @property
-    def current(self) -> dict | None:
+    def dropped(self) -> int:
+        """Frames that arrived while the writer was busy (newer ones replaced them)."""
+        return self._slot.replaced
+
+    @property
+    def current(self) -> dict[str, Any] | None:
         """``{"id", "dir"}`` of the flight being recorded, or ``None``."""
-        with self._lock:
-            cur = self._current
-            return None if cur is None else {"id": cur["id"], "dir": str(cur["dir"])}
+        cur = self._current
+        return None if cur is None else cur.info()
 
-    def flight_dir(self, flight_id: int) -> Path | None:
-        row = self._storage.get_flight(flight_id)
-        return None if row is None else Path(row["dir"])
+    def start_writer(self) -> None:
+        """Start the writer thread (the composition root does, with the other parts)."""
+        if self._thread is None:
+            self._thread = threading.Thread(target=self._writer, name="recorder", daemon=True)
+            self._thread.start()
 
-    def start(self, reason: str) -> dict:
+    def start(self, reason: str) -> dict[str, Any]:
         """Start recording a flight (returns the current one if already recording)."""
         with self._lock:
             if self._current is not None:
-                return {"id": self._current["id"], "dir": str(self._current["dir"])}
+                return self._current.info()
             started = time.time()
             flight_id = self._storage.start_flight("", reason, started)
-            fdir = self.root / f"{flight_id:04d}_{utc_stamp(started)}"
-            (fdir / "frames").mkdir(parents=True, exist_ok=True)
-            self._storage.set_flight_dir(flight_id, str(fdir))
-            results = (fdir / "results.jsonl").open("a", buffering=1)
-            self._current = {"id": flight_id, "dir": fdir, "started": started, "results": results}
-            self._frames = 0
+            folder = self.root / f"{flight_id:04d}_{utc_stamp(started)}"
+            (folder / "frames").mkdir(parents=True, exist_ok=True)
+            self._storage.set_flight_dir(flight_id, str(folder))
+            self._slot.clear()  # frames from before the flight are not part of it
+            self._current = _Flight(flight_id, folder, started)
         self._event("flight", f"flight {flight_id} started ({reason})", {"id": flight_id})
-        return {"id": flight_id, "dir": str(fdir)}
+        return {"id": flight_id, "dir": str(folder)}
 
-    def stop(self, reason: str) -> dict | None:
+    def stop(self, reason: str) -> dict[str, Any] | None:
         """End the current flight; writes its tlog. ``None`` when not recording."""
-        with self._lock:
+        with self._lock:  # the frame being written (if any) is finished first
             cur, self._current = self._current, None
-            frames = self._frames
         if cur is None:
             return None
-        # Let the writer finish what was queued for this flight before closing its files.
-        done = threading.Event()
-        with contextlib.suppress(queue.Full):
-            self._queue.put(("flush", done), timeout=5.0)
-        if not done.wait(5.0):
-            log.warning("recorder: flush of flight %d timed out", cur["id"])
-        cur["results"].close()
+        cur.results.close()
         self._write_tlog(cur, time.time())
-        self._storage.end_flight(cur["id"], frames=frames, end_reason=reason)
-        self._event("flight", f"flight {cur['id']} ended ({reason})", {"id": cur["id"]})
-        return {"id": cur["id"], "dir": str(cur["dir"])}
-
-    def submit(self, processed: Processed) -> None:
-        """Queue one processed frame for the current flight (never blocks)."""
-        with self._lock:
-            cur = self._current
-            if cur is None:
-                return
-            self._frames += 1
-        t_unix = time.time() - (time.monotonic() - processed.frame.t_capture)
-        try:
-            self._queue.put_nowait(("frame", cur, processed, t_unix, self._record_frames()))
-        except queue.Full:
-            with self._lock:
-                self.overflow += 1
+        self._storage.end_flight(cur.id, frames=cur.frames, end_reason=reason)
+        self._event("flight", f"flight {cur.id} ended ({reason})", {"id": cur.id})
+        return cur.info()
 
     def write_tlog_now(self, flight_id: int) -> Path | None:
         """(Re)write the .tlog of a flight still being recorded, up to now."""
-        with self._lock:
-            cur = self._current
-        if cur is None or cur["id"] != flight_id:
+        cur = self._current
+        if cur is None or cur.id != flight_id:
             return None
         return self._write_tlog(cur, time.time())
 
     def close(self) -> None:
         self.stop("station stopped")
-        self._queue.put(_STOP)
-        self._thread.join(5.0)
+        self._slot.close()
+        thread, self._thread = self._thread, None
+        if thread is not None:
+            thread.join(_JOIN_S)
 
     # --- internals -----------------------------------------------------------------------
-    def _event(self, kind: str, text: str, data: dict) -> None:
+    def _event(self, kind: str, text: str, data: dict[str, Any]) -> None:
         if self._on_event is not None:
             try:
                 self._on_event(kind, text, data)
@@ -153,54 +152,53 @@ class Recorder:
 
     def _writer(self) -> None:
         while True:
-            item = self._queue.get()
-            if item is _STOP:
-                return
+            encoded = self._slot.take()
+            if encoded is None:
+                return  # closed
             try:
-                if item[0] == "flush":
-                    item[1].set()
-                    continue
-                _, cur, processed, t_unix, with_frame = item
-                self._write_frame(cur, processed, t_unix, with_frame)
+                self.record(encoded)
             except Exception:
                 log.exception("recorder failed to write a frame")
 
-    def _write_frame(self, cur: dict, p: Processed, t_unix: float, with_frame: bool) -> None:
-        name = None
-        if with_frame:
-            ok, buf = cv2.imencode(
-                ".jpg", p.frame.image, [cv2.IMWRITE_JPEG_QUALITY, int(self._jpeg_quality())]
-            )
-            if ok:
-                name = f"frames/{p.frame.seq:06d}.jpg"
-                (cur["dir"] / name).write_bytes(buf.tobytes())
-        line = {
-            "seq": p.frame.seq,
-            "t_capture": p.frame.t_capture,
-            "t_unix": t_unix,
-            "latency_ms": p.latency_ms,
-            "frame": name,
-            "result": p.result.to_dict(),
-        }
-        fh = cur["results"]
-        if not fh.closed:
-            fh.write(json.dumps(line) + "\n")
+    def record(self, encoded: EncodedFrame) -> bool:
+        """Write one encoded frame to the current flight (the writer thread's work)."""
+        with self._lock:
+            cur = self._current
+            if cur is None or cur.results.closed:
+                return False
+            frame = encoded.processed.frame
+            t_unix = time.time() - (time.monotonic() - frame.t_capture)
+            name = None
+            if encoded.jpeg is not None and self._record_frames():
+                name = f"frames/{frame.seq:06d}.jpg"
+                (cur.dir / name).write_bytes(encoded.jpeg)
+            head = {
+                "seq": frame.seq,
+                "t_capture": frame.t_capture,
+                "t_unix": t_unix,
+                "latency_ms": encoded.processed.latency_ms,
+                "frame": name,
+            }
+            cur.results.write(splice(head, "result", encoded.result_json) + "\n")
+            cur.frames += 1
+            self.written += 1
+            return True
 
-    def _write_tlog(self, cur: dict, t_end: float) -> Path:
-        out = cur["dir"] / "flight.tlog"
+    def _write_tlog(self, cur: _Flight, t_end: float) -> Path:
+        out = cur.dir / "flight.tlog"
         tmp = out.with_suffix(".tlog.part")
         with tmp.open("wb") as fh:
             if self._tlog_dir is not None and self._tlog_dir.is_dir():
                 for path in sorted(self._tlog_dir.glob("*.tlog")):
                     # Only session logs that were written during the flight can hold it.
-                    if path.stat().st_mtime < cur["started"] - 1.0:
+                    if path.stat().st_mtime < cur.started - 1.0:
                         continue
-                    copy_tlog_window(path, fh, cur["started"], t_end)
+                    copy_tlog_window(path, fh, cur.started, t_end)
         shutil.move(tmp, out)
         return out
 
 
-def copy_tlog_window(path: Path, out, t_start: float, t_end: float) -> int:
+def copy_tlog_window(path: Path, out: IO[bytes], t_start: float, t_end: float) -> int:
     """Copy the records of tlog ``path`` stamped in [t_start, t_end] to ``out``.
 
     A tlog is a run of records: an 8-byte big-endian UNIX time in microseconds followed

@@ -111,7 +111,7 @@ class Storage:
                 "INSERT INTO refs (name, pad_size_m, created, dir, data) VALUES (?, ?, ?, ?, ?)",
                 (name, float(pad_size_m), time.time(), dir, json.dumps(data)),
             )
-            return int(cur.lastrowid)
+            return _rowid(cur)
 
     def set_reference_dir(self, ref_id: int, dir: str) -> None:
         with self._lock:
@@ -153,7 +153,7 @@ class Storage:
                 "INSERT INTO flights (started, dir, reason) VALUES (?, ?, ?)",
                 (time.time() if started is None else started, dir, reason),
             )
-            return int(cur.lastrowid)
+            return _rowid(cur)
 
     def set_flight_dir(self, flight_id: int, dir: str) -> None:
         with self._lock:
@@ -187,7 +187,7 @@ class Storage:
                 "INSERT INTO mission_runs (kind, started, detail) VALUES (?, ?, ?)",
                 (kind, time.time(), json.dumps(detail or {})),
             )
-            return int(cur.lastrowid)
+            return _rowid(cur)
 
     def end_mission_run(self, run_id: int, outcome: str, detail: dict | None = None) -> None:
         with self._lock:
@@ -252,3 +252,10 @@ def _ref_row(row: sqlite3.Row) -> dict:
     out["data"] = json.loads(out["data"])
     out["active"] = bool(out["active"])
     return out
+
+
+def _rowid(cursor: sqlite3.Cursor) -> int:
+    """The id of the row an INSERT just made."""
+    if cursor.lastrowid is None:
+        raise RuntimeError("the INSERT made no row")
+    return int(cursor.lastrowid)

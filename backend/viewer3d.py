@@ -19,11 +19,20 @@ from __future__ import annotations
 import logging
 import math
 import threading
+import time
 from collections import deque
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from backend.framebus import FrameBus
 from backend.frames import rot_ned_body, rot_ned_pad
+from backend.link import Telemetry
+from backend.vision_worker import Processed
+
+if TYPE_CHECKING:
+    import viser
 
 log = logging.getLogger(__name__)
 
@@ -87,8 +96,8 @@ class Viewer3D:
         self._aspect = float(aspect)
         self._trail: deque[np.ndarray] = deque(maxlen=trail_points)
         self._lock = threading.Lock()
-        self._server = None
-        self._h: dict = {}
+        self._server: viser.ViserServer | None = None
+        self._h: dict[str, Any] = {}
 
     @property
     def url(self) -> str:
@@ -146,9 +155,10 @@ class Viewer3D:
                 visible=False,
             )
 
-    def _add_pad(self):
+    def _add_pad(self) -> Any:
         image = self._pad_image[:, :, ::-1]  # viser wants RGB
         h, w = image.shape[:2]
+        assert self._server is not None  # called once the server runs
         return self._server.scene.add_image(
             "/pad",
             np.ascontiguousarray(image),
@@ -219,3 +229,59 @@ class Viewer3D:
                 server.stop()
             except Exception:
                 log.exception("viser did not stop cleanly")
+
+
+class ViewerFeed:
+    """Moves the 3D view at 10 Hz: the vehicle from telemetry, the vision pose from the
+    newest result on its own slot of the frame bus (shown for a second after it came)."""
+
+    PERIOD_S = 0.1
+    POSE_SHOWN_S = 1.0
+
+    def __init__(
+        self,
+        viewer: Viewer3D,
+        telemetry: Callable[[], Telemetry],
+        results: FrameBus[Processed],
+    ) -> None:
+        self._viewer = viewer
+        self._telemetry = telemetry
+        self._slot = results.subscribe("viewer3d")
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._latest: Processed | None = None
+
+    def start(self) -> None:
+        if self._thread is None:
+            self._thread = threading.Thread(target=self._run, name="viewer3d-feed", daemon=True)
+            self._thread.start()
+
+    def close(self) -> None:
+        self._stop.set()
+        self._slot.close()
+        thread, self._thread = self._thread, None
+        if thread is not None:
+            thread.join(5.0)
+
+    def _run(self) -> None:
+        while not self._stop.wait(self.PERIOD_S):
+            try:
+                self.tick()
+            except Exception:
+                log.exception("3D view update failed")
+
+    def tick(self) -> None:
+        latest = self._slot.take(0.0)
+        if latest is not None:
+            self._latest = latest
+        tel = self._telemetry()
+        pos, att = tel.position_ned, tel.attitude
+        pose = None
+        if self._latest is not None and time.monotonic() - self._latest.t_done < self.POSE_SHOWN_S:
+            pose = self._latest.result.pose
+        self._viewer.update(
+            position_ned=None if pos is None else (pos.x, pos.y, pos.z),
+            attitude_rpy=None if att is None else (att.roll, att.pitch, att.yaw),
+            vision_position_m=None if pose is None else pose.position_m,
+            vision_R_pad_cam=None if pose is None else pose.R_pad_cam,
+        )

@@ -1,9 +1,9 @@
 """The vision worker: runs the pipeline on its own thread, always on the newest frame.
 
 When the pipeline is slower than the camera the frames in between are skipped and
-counted as dropped (sequence gaps). Results fan out to sinks (WebSocket hub, recorder,
-3D view, missions); each sink must return quickly, and a raising sink is counted and
-logged, never allowed to stop the worker.
+counted as dropped (sequence gaps). Each result is published once on the frame bus
+(:mod:`backend.framebus`); the consumers (missions, encoder, 3D view) take it from
+their own slots at their own pace, so nothing they do can hold up the next frame.
 """
 
 from __future__ import annotations
@@ -19,7 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from backend.camera import Frame, FrameSource
-from pipeline import Camera, FrameResult
+from backend.framebus import FrameBus
+from pipeline import Camera, FrameResult, Reference
 
 log = logging.getLogger(__name__)
 
@@ -34,7 +35,7 @@ class Processed:
 
     frame: Frame
     result: FrameResult
-    reference: object
+    reference: Reference
     camera: Camera
     latency_ms: float
     t_done: float
@@ -62,15 +63,13 @@ class WorkerStats:
         }
 
 
-Sink = Callable[[Processed], None]
-
-
 class VisionWorker:
     """Pulls the newest frame from ``source`` and runs ``process`` on it, in a thread.
 
     Parameters
     ----------
     source : the running camera source.
+    bus : where each result is published.
     reference : returns the active reference (``None``: frames wait unprocessed).
     camera : intrinsics at some size; scaled to each frame's size.
     process : ``process(image_bgr, reference, camera, *, yaw_hint=None) -> FrameResult``
@@ -81,8 +80,9 @@ class VisionWorker:
     def __init__(
         self,
         source: FrameSource,
+        bus: FrameBus[Processed],
         *,
-        reference: Callable[[], object | None],
+        reference: Callable[[], Reference | None],
         camera: Camera,
         process: Callable[..., FrameResult],
         yaw_hint: Callable[[], float | None] | None = None,
@@ -96,7 +96,7 @@ class VisionWorker:
         self._process = process
         self._yaw_hint = yaw_hint
         self._join_timeout = join_timeout
-        self._sinks: list[Sink] = []
+        self._bus = bus
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -104,23 +104,10 @@ class VisionWorker:
         self._processed = 0
         self._dropped = 0
         self._errors = 0
-        self._sink_errors = 0
         self._last_error = ""
         self._done_times: deque[float] = deque(maxlen=window)
         self._latencies: deque[float] = deque(maxlen=window)
         self._detected: deque[bool] = deque(maxlen=window)
-
-    def add_sink(self, sink: Sink) -> Callable[[], None]:
-        """Call ``sink(processed)`` for every result; returns a function that removes it."""
-        with self._lock:
-            self._sinks.append(sink)
-
-        def remove() -> None:
-            with self._lock:
-                if sink in self._sinks:
-                    self._sinks.remove(sink)
-
-        return remove
 
     def start(self) -> None:
         if self._thread is not None:
@@ -157,7 +144,7 @@ class VisionWorker:
                 processed=self._processed,
                 dropped=self._dropped,
                 detected_rate=rate,
-                errors=self._errors + self._sink_errors,
+                errors=self._errors,
                 last_error=self._last_error,
             )
 
@@ -195,7 +182,7 @@ class VisionWorker:
                 continue
             self._handle(frame, reference)
 
-    def _handle(self, frame: Frame, reference: object) -> None:
+    def _handle(self, frame: Frame, reference: Reference) -> None:
         try:
             camera = self._camera_for(frame.image)
             hint = self._yaw_hint() if self._yaw_hint is not None else None
@@ -219,15 +206,7 @@ class VisionWorker:
             self._done_times.append(t_done)
             self._latencies.append(processed.latency_ms)
             self._detected.append(bool(result.detected))
-            sinks = list(self._sinks)
-        for sink in sinks:
-            try:
-                sink(processed)
-            except Exception as exc:
-                with self._lock:
-                    self._sink_errors += 1
-                    self._last_error = f"sink: {type(exc).__name__}: {exc}"
-                log.exception("a vision sink failed")
+        self._bus.publish(processed)
 
     def _note_error(self, message: str) -> None:
         with self._lock:

@@ -95,8 +95,7 @@ def fly_once(speedup: float, noise_m: float, speed: bool, seed: int) -> dict[str
             out["hold_on_gps_error_m"] = round(_xy_error(obs, origin), 3)
             texts_from = obs.text_count
             before = link.telemetry.position_ned
-            result = obs.command(MAV_CMD_SET_EKF_SOURCE_SET, (2,), 5.0)
-            out["source_set_2"] = result
+            out["source_set_2"] = obs.command(MAV_CMD_SET_EKF_SOURCE_SET, (2,), 5.0)
             _wait_sim(obs, 3.0)
             after = link.telemetry.position_ned
             if before is not None and after is not None:

@@ -15,6 +15,7 @@ The projection's Jacobian comes from ``cv2.projectPoints``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -22,10 +23,12 @@ import numpy as np
 from pipeline.camera import Camera
 
 MIN_SIDE_PX = 7.0  # sides shorter than this in the image are not sampled
-END_MARGIN_PX = 2.0  # stay this far from a side's corners
-SAMPLE_STEP_PX = 1.5
+END_MARGIN = 0.12  # at most this share of a straight side is left out at each end
+END_MARGIN_OF_EXTENT = 0.02  # and at most this share of the model's size
+MODEL_SAMPLES = 600  # points along all the model's sides, spread by length
 MAX_SAMPLES_PER_SIDE = 40
 MIN_GRADIENT = 4.0
+CURVE_VERTICES = 12  # polygons with more vertices trace a curve (a ring, a disc's rim)
 
 
 @dataclass(frozen=True, eq=False)
@@ -37,18 +40,48 @@ class EdgeModel:
     bright: np.ndarray  # (S,) the polygon is brighter than its surroundings
     polygon: np.ndarray  # (S,) which polygon each side belongs to
     clearance_m: np.ndarray  # (S,) distance to the nearest other side alongside
+    curved: np.ndarray  # (S,) the side is a piece of a curve, not a straight edge
+
+    @cached_property
+    def samples(self) -> tuple[np.ndarray, np.ndarray]:
+        """Points along the sides (pad metres) and the side each lies on.
+
+        About ``MODEL_SAMPLES`` in all, spread by length: at least 3 on a
+        straight side (its ends left out: the neighbouring side's edge
+        disturbs them), at least 1 on a piece of a curve.
+        """
+        d = self.b_m - self.a_m
+        length = np.hypot(d[:, 0], d[:, 1])
+        per_m = MODEL_SAMPLES / max(float(length.sum()), 1e-12)
+        counts = np.clip(np.round(length * per_m), 1, MAX_SAMPLES_PER_SIDE).astype(int)
+        counts = np.where(self.curved, counts, np.maximum(counts, 3))
+        side = np.repeat(np.arange(len(length)), counts)
+        first = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        k = np.arange(len(side)) - np.repeat(first, counts)
+        n = np.repeat(counts, counts)
+        # Left out at each end: a little of the model's size, at most a share
+        # of a short side (a stroke's end).
+        extent = float(np.ptp(np.vstack([self.a_m, self.b_m]), axis=0).max())
+        f = np.minimum(END_MARGIN, END_MARGIN_OF_EXTENT * extent / np.maximum(length, 1e-12))
+        f = f[side]
+        t = np.where(self.curved[side], (k + 0.5) / n, f + (1 - 2 * f) * k / np.maximum(n - 1, 1))
+        return self.a_m[side] + t[:, None] * d[side], side
 
     @classmethod
     def from_polygons(cls, polygons: list[tuple[np.ndarray, bool]]) -> EdgeModel:
-        starts, ends, bright, owner = [], [], [], []
+        starts, ends, bright, owner, curved = [], [], [], [], []
         for k, (corners_m, is_bright) in enumerate(polygons):
             c = np.asarray(corners_m, np.float64).reshape(-1, 2)
             starts.append(c)
             ends.append(np.roll(c, -1, axis=0))
             bright.append(np.full(len(c), bool(is_bright)))
             owner.append(np.full(len(c), k))
+            curved.append(np.full(len(c), len(c) > CURVE_VERTICES))
         a, b = np.vstack(starts), np.vstack(ends)
-        return cls(a, b, np.concatenate(bright), np.concatenate(owner), _clearance_m(a, b))
+        poly = np.concatenate(owner)
+        return cls(
+            a, b, np.concatenate(bright), poly, _clearance_m(a, b, poly), np.concatenate(curved)
+        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -90,7 +123,7 @@ def fit_edges(
             break
         points, normal, side_id = samples
         proj, jac = _project(points, rvec, tvec, camera)
-        delta, ok = _edge_offsets(img, proj, normal, search)
+        delta, ok = edge_offsets(img, proj, normal, search)
         if np.count_nonzero(ok) < 12:
             break
         # Residual: how far the model edge lies from the found edge, along the normal.
@@ -132,7 +165,7 @@ def edge_support(image: np.ndarray, model: EdgeModel, camera: Camera, rvec, tvec
         return 0.0
     points, normal, _ = samples
     proj, _ = _project(points, rvec, tvec, camera)
-    delta, ok = _edge_offsets(img, proj, normal, 1.5)
+    delta, ok = edge_offsets(img, proj, normal, 1.5)
     h, w = img.shape[:2]
     seen = (proj[:, 0] > 2) & (proj[:, 1] > 2) & (proj[:, 0] < w - 3) & (proj[:, 1] < h - 3)
     if not seen.any():
@@ -151,7 +184,7 @@ def _project(model: np.ndarray, rvec, tvec, camera: Camera):
     return proj.reshape(-1, 2), jac
 
 
-def _clearance_m(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def _clearance_m(a: np.ndarray, b: np.ndarray, polygon: np.ndarray) -> np.ndarray:
     """For each side, the distance to the nearest other side running alongside it.
 
     Two parallel edges closer than the blur's reach bias each other's measured
@@ -162,8 +195,14 @@ def _clearance_m(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     u = d / length[:, None]
     mid = 0.5 * (a + b)
     out = np.full(len(a), np.inf)
+    # A curve's neighbouring sides run on from each other, not alongside.
+    follows = np.zeros(len(a), bool)
     for i in range(len(a)):
         parallel = np.abs(u[:, 0] * u[i, 1] - u[:, 1] * u[i, 0]) < 0.17
+        follows[:] = False
+        touching = (np.hypot(*(a - b[i]).T) < 1e-12) | (np.hypot(*(b - a[i]).T) < 1e-12)
+        follows[touching & (polygon == polygon[i])] = True
+        parallel &= ~follows
         parallel[i] = False
         if not parallel.any():
             continue
@@ -178,12 +217,27 @@ def _clearance_m(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def _samples(model: EdgeModel, camera: Camera, rvec, tvec, min_clearance_px: float):
     """Model points along every side measurable in the image, with image normals."""
-    a_m, b_m = model.a_m, model.b_m
-    ends, _ = _project(np.vstack([a_m, b_m]), rvec, tvec, camera)
-    pa, pb = ends[: len(a_m)], ends[len(a_m) :]
+    ends, _ = _project(np.vstack([model.a_m, model.b_m]), rvec, tvec, camera)
     R, _ = cv2.Rodrigues(rvec)
-    depth = 0.5 * (a_m + b_m) @ R[2, :2] + float(tvec[2, 0])
+    depth = 0.5 * (model.a_m + model.b_m) @ R[2, :2] + float(tvec[2, 0])
     clearance_px = model.clearance_m * camera.fx / np.maximum(depth, 1e-6)
+    n = len(model.a_m)
+    return side_samples(model, ends[:n], ends[n:], clearance_px >= min_clearance_px)
+
+
+def side_samples(
+    model: EdgeModel,
+    pa: np.ndarray,
+    pb: np.ndarray,
+    usable: np.ndarray,
+    min_side_px: float = MIN_SIDE_PX,
+):
+    """The model's sample points on the sides that are long enough in the image.
+
+    ``pa``/``pb``: the sides' ends in the image; ``usable``: sides clear of
+    their neighbours. Returns (points in pad metres, unit image normals from
+    the bright side of each edge to the dark side, side index), or None.
+    """
     # Each polygon's orientation in the image tells which way is outward;
     # normals point from the bright side of an edge to the dark side.
     cross = pa[:, 0] * pb[:, 1] - pb[:, 0] * pa[:, 1]
@@ -192,26 +246,23 @@ def _samples(model: EdgeModel, camera: Camera, rvec, tvec, min_clearance_px: flo
     sign = np.where(model.bright, orient, -orient)
     d = pb - pa
     length = np.hypot(d[:, 0], d[:, 1])
-    use = np.flatnonzero((length >= MIN_SIDE_PX) & (clearance_px >= min_clearance_px))
-    if len(use) == 0:
+    # A curve's short sides are sampled anyway: its corners are not corners of
+    # the paint, only of the polygon tracing it.
+    ok = (length >= np.where(model.curved, 1.0, min_side_px)) & usable
+    points, side = model.samples
+    keep = ok[side]
+    if not keep.any():
         return None
-    counts = np.clip((length[use] - 2 * END_MARGIN_PX) / SAMPLE_STEP_PX, 3, MAX_SAMPLES_PER_SIDE)
-    counts = counts.astype(int)
-    side = np.repeat(use, counts)
-    first = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    k = np.arange(len(side)) - np.repeat(first, counts)
-    f = END_MARGIN_PX / length[side]
-    t = f + (1 - 2 * f) * k / np.maximum(np.repeat(counts, counts) - 1, 1)
-    points = a_m[side] + t[:, None] * (b_m[side] - a_m[side])
+    points, side = points[keep], side[keep]
     u = d[side] / length[side][:, None]
     normal = sign[side][:, None] * np.column_stack([u[:, 1], -u[:, 0]])
     return points, normal, side
 
 
-_OFFSETS = np.arange(-3.0, 3.01, 0.5)
+_OFFSETS = np.arange(-8.0, 8.01, 0.5)
 
 
-def _edge_offsets(img: np.ndarray, proj: np.ndarray, normal: np.ndarray, search: float):
+def edge_offsets(img: np.ndarray, proj: np.ndarray, normal: np.ndarray, search: float):
     """Signed distance along each normal from the projected point to the image edge."""
     offsets = _OFFSETS[np.abs(_OFFSETS) <= search + 1e-6]
     step = float(offsets[1] - offsets[0])

@@ -168,31 +168,3 @@ def _intersections(centre: np.ndarray, direction: np.ndarray) -> np.ndarray | No
     w = q - p
     t = (w[:, 0] * s[:, 1] - w[:, 1] * s[:, 0]) / cross
     return p + t[:, None] * r
-
-
-def surround_ratio(image: np.ndarray, corners: np.ndarray, offset_px: float) -> float:
-    """Mean gray just outside a bright polygon's sides over the mean just inside.
-
-    A pad's H is painted on a dark board, so its surroundings are far darker
-    than its strokes (about 0.1 on the seed's pad); a look-alike painted on a
-    floor has the floor around it (0.4 and up). Sides are sampled over their
-    middle half, ``offset_px`` either side of the edge.
-    """
-    corners = np.asarray(corners, np.float64).reshape(-1, 2)
-    orient = 1.0 if signed_area(corners) > 0 else -1.0
-    d = np.roll(corners, -1, axis=0) - corners
-    length = np.hypot(d[:, 0], d[:, 1])
-    keep = length > 1e-9
-    u = d[keep] / length[keep, None]
-    normal = orient * np.stack([u[:, 1], -u[:, 0]], axis=1)
-    t = np.linspace(0.25, 0.75, 9)
-    base = corners[keep][:, None, :] + t[None, :, None] * d[keep][:, None, :]
-    out = (base + offset_px * normal[:, None, :]).reshape(-1, 2)
-    inside = (base - offset_px * normal[:, None, :]).reshape(-1, 2)
-    img = image if image.dtype == np.float32 else image.astype(np.float32)
-    pts = np.vstack([out, inside]).astype(np.float32)
-    vals = cv2.remap(
-        img, pts[:, 0:1], pts[:, 1:2], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
-    ).ravel()
-    outer, inner = float(vals[: len(out)].mean()), float(vals[len(out) :].mean())
-    return outer / max(inner, 1.0)

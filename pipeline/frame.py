@@ -10,33 +10,48 @@ import cv2
 import numpy as np
 
 from pipeline.camera import Camera
-from pipeline.edgefit import edge_support, fit_edges
-from pipeline.edges import refine_polygon, surround_ratio
-from pipeline.moments import hu_distance, shape_moments
+from pipeline.candidates import (
+    MIN_BLOB_SEPARATION,
+    MIN_EVIDENCE,
+    MIN_H_AREA_PX,
+    blob_separation,
+    locate_all,
+)
+from pipeline.edgefit import EdgeFit, edge_support, fit_edges
+from pipeline.homography_fit import apply_h, fit_homography
+from pipeline.homography_fit import support as edge_share
+from pipeline.moments import shape_moments
 from pipeline.pose import (
     ippe_candidates,
     pick_by_yaw,
-    pose_to_vectors,
     project,
     tilt_deg,
     to_pose,
 )
-from pipeline.preprocess import DEFAULT_METHOD, METHODS, binarize, check_image, subsample
-from pipeline.reference import H_CORNERS, Reference
+from pipeline.preprocess import (
+    DEFAULT_METHOD,
+    METHODS,
+    binarize_channel,
+    check_image,
+    subsample,
+    to_channel,
+)
+from pipeline.reference import Reference
 from pipeline.result import FrameResult
-from pipeline.shapes import Region, douglas_peucker, polygon_corners, regions, upsampled_contour
+from pipeline.shapes import regions
+from pipeline.strokes import MAX_DIP, deepest_dip, stroke_samples
+from pipeline.template import compare
 
-MIN_H_AREA_PX = 80.0  # smaller H's carry too few pixels for 12 corners
-MAX_HU_DISTANCE = 0.7  # log10 distance of Hu 1-2 (3-7 are noise for a symmetric H)
-MAX_SHAPE_RESIDUAL = 0.1  # homography fit RMS / sqrt(area): real H < 0.05, others > 0.25
-SOLIDITY_TOLERANCE = 0.12
-FINE_TRACE_BELOW_PX = 4000.0  # H's smaller than this are traced on a finer grid
-FINE_FACTOR = 4
-MIN_EDGE_SUPPORT = 0.45  # pad edges found where the pose puts them (look-alikes: < 0.3)
-# Around a real H the board is dark; a look-alike on a floor is framed by floor.
-SURROUND_MARGIN = 0.3  # frame's surround ratio may exceed the reference's by this
-SURROUND_OFFSET_PX = 2.5  # sampled this far either side of the H's edges
+MIN_EDGE_SUPPORT = 0.45  # the H's edges found where the pose puts them
+MIN_TEMPLATE_NCC = 0.4  # with the reference picture around the H
+BOARD_TOLERANCE = 0.2  # the board's brightness relative to the H's, against the reference's
+MAX_HUE = 0.3  # the board's chromaticity, L1 distance to the reference's
 AMBIGUOUS_FIT = 0.8  # two poses whose RMS errors are within this ratio are a tie
+WIDE_SEARCH_PX = 6.0  # how far the whole pad's edges are first looked for
+SELF_SUFFICIENT_PX = 100.0  # an H this large pins the pose by itself
+MIN_MARKS_FOUND = 0.5  # of the marks' resolvable sides, for the whole pad to count
+MARK_SIDE_PX = 4.0  # a mark's straight side shorter than this (a star's point) is not told
+_HALF_TURN = np.diag([-1.0, -1.0, 1.0])  # pad metres turned about the centre
 
 
 class CandidateVerifier(Protocol):
@@ -66,7 +81,8 @@ def process_frame(
     yaw_hint : the camera's yaw in the pad frame (degrees, see
         ``pipeline.result.yaw_of``), e.g. from the vehicle's heading: picks
         which of the two poses of a 180-degree-symmetric pad to report.
-    method : thresholding, one of ``pipeline.preprocess.METHODS``.
+    method : thresholding of the reference's channel, one of
+        ``pipeline.preprocess.METHODS`` ("seed" is the dissertation's chain).
     verifier : an optional check of each H-shaped candidate's corner pattern
         (the RBM/DBN of ``pipeline.learn``, trained for this reference),
         consulted before the pose.
@@ -104,185 +120,202 @@ def process_frame(
     work, scale = subsample(image)
     if scale != 1.0:
         cam = cam.scaled(work.shape[1], work.shape[0])
-    binary = binarize(work, method)
+    binary = binarize_channel(to_channel(work, reference.projection), method)
     clock.lap("preprocess")
 
     area = float(work.shape[0] * work.shape[1])
     found = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=0.5 * area)
-    ranked = rank_candidates(found, reference)
     clock.lap("contours")
 
-    shapes = rejected = unframed = 0
-    for region, hu in ranked:
-        poly = None
-        for reading in corner_readings(region, binary):
-            ordered, residual = match_corners(reading, reference.corners_m, region.area)
-            if residual <= MAX_SHAPE_RESIDUAL:
-                poly = ordered
-                break
+    located = rejected = unclear = unlike = unframed = broken = 0
+    for hit in locate_all(found, binary, reference):
+        located += 1
         clock.lap("corners")
-        if poly is None:
+        stroke = reference.leg_fraction * float(np.ptp(hit.corners, axis=0).max())
+        H_inv = np.linalg.inv(hit.fit.H)
+        blob = blob_separation(
+            binary.smooth,
+            hit.candidate.region,
+            stroke,
+            lambda px, Hi=H_inv: ~reference.is_paint(apply_h(Hi, px)),
+        )
+        if hit.evidence < MIN_EVIDENCE or not blob >= MIN_BLOB_SEPARATION:
+            unclear += 1
+            clock.lap("check")
             continue
-        shapes += 1
-        refined = refine_polygon(binary.smooth, poly)
-        corners = refined[0] if refined is not None else poly
-        clock.lap("refine")
+        seen = compare(
+            work,
+            binary.smooth,
+            reference.template_pyramid,
+            reference.channel_px_per_m,
+            reference.corners_m,
+            hit.fit.H,
+        )
+        # nan (a patch too small to compare, a board too dark for a hue) passes.
+        if seen.ncc < MIN_TEMPLATE_NCC:
+            unlike += 1
+            clock.lap("check")
+            continue
+        if abs(seen.board - seen.reference_board) > BOARD_TOLERANCE or seen.hue > MAX_HUE:
+            unframed += 1
+            clock.lap("check")
+            continue
+        samples = stroke_samples(reference.corners_m, hit.fit.H, reference.is_paint)
+        if deepest_dip(work, reference.projection.weights, samples) > MAX_DIP:
+            broken += 1
+            clock.lap("check")
+            continue
+        clock.lap("check")
         if verifier is not None:
-            # Refined corners: what the verifier sees does not depend on the threshold.
-            accepted = verifier.accepts(corners, region.contour, cam)
+            # Fitted corners: what the verifier sees does not depend on the threshold.
+            accepted = verifier.accepts(hit.corners, hit.candidate.region.contour, cam)
             clock.lap("verify")
             if not accepted:
                 rejected += 1
                 continue
-        fitted = _fit_pose(reference, binary.smooth, cam, corners)
+        H = _whole_pad(hit.fit.H, reference, binary.smooth)
+        # With the pad's other marks found, or a lens whose distortion the
+        # homography cannot follow, the pose is refined on the edges.
+        polish = H is not hit.fit.H or cam.has_distortion
+        H = _heading(H, reference, binary.smooth)
+        fitted = _fit_pose(reference, binary.smooth, cam, H, polish=polish)
         clock.lap("pose")
         if fitted is None:
             continue
         fit, support = fitted
-        h_px = project(reference.corners_m, fit.rvec, fit.tvec, cam)
-        surround = surround_ratio(binary.smooth, h_px, SURROUND_OFFSET_PX)
-        if surround > reference.surround_ratio + SURROUND_MARGIN:
-            unframed += 1
-            clock.lap("pose")
-            continue
-        pose = pick_by_yaw(to_pose(fit.rvec, fit.tvec, fit.rms_px, reference.symmetric), yaw_hint)
-        # Corner i is where reference corner i lies under the reported pose
-        # (for a symmetric pad the twin pose numbers the corners 6 apart).
-        corners = project(reference.corners_m, *pose_to_vectors(pose), cam)
+        found_pose = to_pose(fit.rvec, fit.tvec, fit.rms_px, reference.symmetric)
+        pose = pick_by_yaw(found_pose, yaw_hint)
+        # The corners as found on the frame (they do not depend on the camera
+        # model), numbered for the reported pose: corner i is where reference
+        # corner i lies; the twin of a symmetric pad numbers them 6 apart.
+        corners = apply_h(H, reference.corners_m)
+        if pose is not found_pose:
+            corners = np.roll(corners, -6, axis=0)
+        region = hit.candidate.region
         mom = shape_moments(region.contour)
         timings["total"] = (time.perf_counter() - t_start) * 1e3
         back = 1.0 / scale
         return FrameResult(
             detected=True,
             corners_px=(corners + 0.5) * back - 0.5,
-            hu=tuple(float(v) for v in hu),
+            hu=tuple(float(v) for v in hit.candidate.hu),
             orientation_deg=float(mom.orientation_deg),
             eccentricity=float(mom.eccentricity),
             pose=pose,
             timings_ms=timings,
             contour_px=(region.contour.astype(np.float64) + 0.5) * back - 0.5,
             score=support,
+            mask=binary.mask,
         )
-    if not ranked:
+    clock.lap("corners")
+    if not found:
         reason = "no H-like shape in view"
-    elif not shapes:
-        reason = f"no H among {len(ranked)} H-like shape(s)"
-    elif rejected == shapes:
-        reason = f"the verifier rejected {shapes} H-shaped mark(s)"
+    elif not located:
+        reason = f"no H among {len(found)} bright shape(s)"
+    elif rejected:
+        reason = f"the verifier rejected {rejected} H-shaped mark(s)"
+    elif unclear:
+        reason = f"{unclear} H-shaped mark(s), none clearly an H on a plain board"
+    elif unlike:
+        reason = f"{unlike} H-shaped mark(s) that do not look like the reference picture"
     elif unframed:
-        reason = f"{unframed} H-shaped mark(s) without the pad's dark board around them"
+        reason = f"{unframed} H-shaped mark(s) without the pad's board around them"
+    elif broken:
+        reason = f"{broken} H-shaped mark(s) with a stroke cut through"
     else:
-        reason = f"{shapes} H-shaped mark(s), but no pad's edges around them"
-    return _nothing(timings, t_start, reason)
+        reason = f"{located} H-shaped mark(s), but no pad's edges around them"
+    return _nothing(timings, t_start, reason, binary.mask)
 
 
-def rank_candidates(found: list[Region], reference: Reference) -> list[tuple[Region, tuple]]:
-    """Regions shaped roughly like the reference's H, most alike first.
+def _whole_pad(H: np.ndarray, reference: Reference, smooth: np.ndarray) -> np.ndarray:
+    """The homography refitted on the edges of the whole pad, when they are found.
 
-    Solidity and the first two Hu invariants are cheap and change little under
-    the tilts a hovering camera sees; Hu 3-7 of a symmetric H are noise.
+    The H alone pins the plane's tilt poorly: its corners, a few tens of pixels
+    apart, leave a degree of tilt to a tenth of a pixel. The pad's other marks
+    (a ring, a rim, bars) lie farther out; seen from the H's homography they may
+    be several pixels off, so they are searched for widely first. Kept when
+    most of the marks' edges are found and it still puts the H where it was.
+    An H over ``SELF_SUFFICIENT_PX`` pins the pose by itself.
     """
-    out = []
-    for r in found:
-        if abs(r.solidity - reference.solidity) > SOLIDITY_TOLERANCE:
-            continue
-        # OpenCV's moments here: the same numbers as pipeline.moments, faster.
-        hu = tuple(cv2.HuMoments(cv2.moments(r.contour.reshape(-1, 1, 2))).ravel())
-        d = hu_distance(hu, reference.hu, count=2)
-        if d <= MAX_HU_DISTANCE:
-            out.append((d, r, hu))
-    out.sort(key=lambda item: item[0])
-    return [(r, hu) for _, r, hu in out]
-
-
-def corner_readings(region: Region, binary):
-    """Ways to read the 12 corners of a candidate, best first.
-
-    Curvature-scale-space corners on the boundary (traced on a 4x finer grid
-    for small candidates), then Douglas-Peucker polygons of the same boundary
-    and of the pixel boundary: blur can round a corner off or add a ripple
-    that CSS takes for one, and the cheaper readings are tried only then.
-    """
-    fine = None
-    if region.area <= FINE_TRACE_BELOW_PX:
-        fine = upsampled_contour(binary.smooth, binary.mask, region, FINE_FACTOR)
-    if fine is not None:
-        pts, offset = fine
-        for poly in (polygon_corners(pts, H_CORNERS), douglas_peucker(pts, H_CORNERS)):
-            if poly is not None:
-                yield (poly + 0.5) / FINE_FACTOR - 0.5 + offset
-    else:
-        poly = polygon_corners(region.contour, H_CORNERS)
-        if poly is not None:
-            yield poly
-    poly = douglas_peucker(region.contour, H_CORNERS)
-    if poly is not None:
-        yield poly
-
-
-def match_corners(poly: np.ndarray, ref_m: np.ndarray, area: float) -> tuple[np.ndarray, float]:
-    """Rotate the corner list onto the reference's order; return it and the fit residual.
-
-    All 12 cyclic shifts are scored at once by an affine fit (a few microseconds);
-    the best is checked with a full homography, whose residual relative to the
-    shape's size says whether this is the reference's H at all.
-    """
-    n = len(ref_m)
-    X = np.column_stack([ref_m, np.ones(n)])
-    P = np.linalg.pinv(X)  # (3, n)
-    shifts = np.stack([np.roll(poly, -s, axis=0) for s in range(n)])  # (n, n, 2)
-    fitted = np.einsum("ij,sjk->sik", X @ P, shifts)
-    err = np.sum((shifts - fitted) ** 2, axis=(1, 2))
-    s = int(np.argmin(err))
-    ordered = shifts[s]
-    H, _ = cv2.findHomography(ref_m, ordered, 0)
-    if H is None:
-        return ordered, math.inf
-    proj = cv2.perspectiveTransform(ref_m.reshape(-1, 1, 2), H).reshape(-1, 2)
-    rms = float(np.sqrt(np.mean(np.sum((proj - ordered) ** 2, axis=1))))
-    return ordered, rms / math.sqrt(area)
-
-
-def _fit_pose(reference: Reference, smooth: np.ndarray, cam: Camera, corners: np.ndarray):
-    """The pose that best explains the edges of the whole pad, or None.
-
-    IPPE on the H's corners gives two candidate poses (a small pad seen nearly
-    head-on can be tilted either way); each takes one step on the edges of the
-    H, the side bars and the board outline (pipeline.edgefit), and the one whose
-    edges fit better goes on to converge. When the two fit equally well both
-    go on, and if they still tie the one nearer to looking straight down wins,
-    as a hovering multirotor's camera does. The winner must find most of the
-    pad's edges where it puts them, or the H was a look-alike.
-    """
-    model = reference.edge_model
+    model = reference.marks_model
+    span = float(np.ptp(apply_h(H, reference.corners_m), axis=0).max())
+    if model is None or span > SELF_SUFFICIENT_PX:
+        return H
     img = smooth.astype(np.float32)
-    fits = []
-    for rvec0, tvec0 in ippe_candidates(reference.corners_m, corners, cam):
-        fit = fit_edges(img, model, cam, rvec0, tvec0, iterations=1)
-        if fit is not None:
-            fits.append(fit)
-    if not fits:
-        return None
-    fits.sort(key=lambda f: f.rms_px)
-    if len(fits) > 1 and fits[0].rms_px < AMBIGUOUS_FIT * fits[1].rms_px:
-        fits = fits[:1]
+    fit = fit_homography(
+        img, reference.edge_model, H, iterations=3, search_px=WIDE_SEARCH_PX, sides_alike=False
+    )
+    if fit is None or edge_share(img, model, fit.H, MARK_SIDE_PX) < MIN_MARKS_FOUND:
+        return H
+    moved = apply_h(fit.H, reference.corners_m) - apply_h(H, reference.corners_m)
+    if np.max(np.hypot(moved[:, 0], moved[:, 1])) > max(1.0, 0.03 * span):
+        return H
+    return fit.H
+
+
+def _heading(H: np.ndarray, reference: Reference, smooth: np.ndarray) -> np.ndarray:
+    """The homography (pad metres -> pixels) for the pad's heading.
+
+    The H alone looks the same after a half turn; on a pad whose other marks
+    do not (a triangle, stars above the H), the turn under which more of the
+    marks' edges are found is the pad's.
+    """
+    model = reference.marks_model
+    if reference.symmetric or model is None:
+        return H
+    img = smooth.astype(np.float32)
+    turned = H @ _HALF_TURN
+    return turned if edge_share(img, model, turned) > edge_share(img, model, H) else H
+
+
+def _fit_pose(
+    reference: Reference, smooth: np.ndarray, cam: Camera, H: np.ndarray, *, polish: bool
+):
+    """The camera's pose over the pad from the located homography, or None.
+
+    The homography already holds every edge of the pad that was found; the
+    pose is the rigid motion that maps the pad's points (the H's corners and
+    the marks' vertices) where it does, by IPPE. A small pad seen nearly head
+    on fits two poses almost equally, tilted either way: unless one fits
+    clearly better, the one nearer to looking straight down wins, as a
+    hovering multirotor's camera does. IPPE works from the homography's local
+    Jacobian; a few Levenberg-Marquardt steps on all the points take a tenth
+    of a pixel off, which on a small pad is a few percent of range. With the
+    pad's other marks found (``polish``), the pose then takes a few steps on all
+    the pad's edges with the camera model, whose 6 unknowns noise moves less
+    than the homography's 8; kept when it finds at least as many of the edges.
+    Returns the fit and the share of the whole pad's edges found where the pose
+    puts them.
+    """
+    pts_m = reference.pose_points_m
+    px = apply_h(H, pts_m)
+    obj = np.column_stack([pts_m, np.zeros(len(pts_m))])
     best = None
-    for start in fits:
-        fit = fit_edges(img, model, cam, start.rvec, start.tvec, iterations=2, search_px=1.5)
-        if fit is None:
-            continue
-        cand = (fit.rms_px, tilt_deg(fit.rvec), fit)
+    for rvec0, tvec0 in ippe_candidates(pts_m, px, cam):
+        rvec, tvec = cv2.solvePnPRefineLM(obj, px, cam.K, cam.dist, rvec0.copy(), tvec0.copy())
+        err = project(pts_m, rvec, tvec, cam) - px
+        rms = float(np.sqrt(np.mean(np.sum(err**2, axis=1))))
+        cand = (rms, tilt_deg(rvec), EdgeFit(rvec, tvec, rms, len(pts_m), 0))
         if best is None or _better(cand, best):
             best = cand
     if best is None:
         return None
     fit = best[2]
-    support = edge_support(img, model, cam, fit.rvec, fit.tvec)
-    return (fit, support) if support >= MIN_EDGE_SUPPORT else None
+    img = smooth.astype(np.float32)
+    support = edge_support(img, reference.edge_model, cam, fit.rvec, fit.tvec)
+    if polish:
+        refined = fit_edges(img, reference.edge_model, cam, fit.rvec, fit.tvec, search_px=1.5)
+        if refined is not None:
+            better = edge_support(img, reference.edge_model, cam, refined.rvec, refined.tvec)
+            if better >= support:  # a drift along a flat valley finds fewer edges
+                fit, support = refined, better
+    return fit, support
 
 
 def _better(a, b) -> bool:
-    if min(a[0], b[0]) > AMBIGUOUS_FIT * max(a[0], b[0]):
+    """(rms, tilt, fit) a before b: the better fit, or on a tie (both within a
+    tenth of a pixel, or within AMBIGUOUS_FIT of each other) the smaller tilt."""
+    if max(a[0], b[0]) < 0.1 or min(a[0], b[0]) > AMBIGUOUS_FIT * max(a[0], b[0]):
         return a[1] < b[1]
     return a[0] < b[0]
 
@@ -298,7 +331,9 @@ def _camera_for(camera: Camera, width: int, height: int) -> Camera:
     return camera.scaled(width, height)
 
 
-def _nothing(timings: dict[str, float], t_start: float, reason: str) -> FrameResult:
+def _nothing(
+    timings: dict[str, float], t_start: float, reason: str, mask: np.ndarray | None = None
+) -> FrameResult:
     timings["total"] = (time.perf_counter() - t_start) * 1e3
     nan = float("nan")
     return FrameResult(
@@ -310,6 +345,7 @@ def _nothing(timings: dict[str, float], t_start: float, reason: str) -> FrameRes
         pose=None,
         timings_ms=timings,
         reason=reason,
+        mask=mask,
     )
 
 

@@ -1,6 +1,9 @@
-"""Frame preprocessing: input checks, subsampling, gray conversion, thresholding.
+"""Frame preprocessing: input checks, subsampling, the reference's channel, thresholding.
 
-Two thresholding methods, both selectable:
+Frames are turned into one channel in which the reference's H is bright (its
+learned colour projection, ``pipeline.colour``: plain BT.601 gray for the
+seed's white H on a dark board, inverted gray for a dark H on paper, a colour
+axis for a white H on an orange disc). Three thresholding methods, all selectable:
 
 ``"seed"``
     The dissertation's chain (section 4.1.1): BT.601 gray, a 3x3 Laplacian
@@ -25,6 +28,8 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+
+from pipeline.colour import GRAY, Projection
 
 METHODS = ("adaptive", "otsu", "seed")
 DEFAULT_METHOD = "adaptive"
@@ -91,11 +96,32 @@ def seed_enhance(gray: np.ndarray) -> np.ndarray:
     return np.clip(g + smoothed, 0, 255)
 
 
-def binarize(image_bgr: np.ndarray, method: str = DEFAULT_METHOD) -> Binarized:
-    """Threshold a BGR frame: white paint -> 255, everything else -> 0."""
+def has_colour(image_bgr: np.ndarray) -> bool:
+    """Whether the picture's channels differ (a gray camera repeats one channel)."""
+    sample = image_bgr[::7, ::7]
+    return bool(
+        np.any(sample[..., 0] != sample[..., 1]) or np.any(sample[..., 1] != sample[..., 2])
+    )
+
+
+def to_channel(image_bgr: np.ndarray, projection: Projection = GRAY) -> np.ndarray:
+    """The frame on the reference's channel (uint8): its H bright, its board dark."""
+    if not has_colour(image_bgr):
+        return projection.apply_gray(image_bgr[..., 0].copy())
+    return projection.apply(image_bgr)
+
+
+def binarize(
+    image_bgr: np.ndarray, method: str = DEFAULT_METHOD, projection: Projection = GRAY
+) -> Binarized:
+    """Threshold a BGR frame on ``projection``'s channel: the H's paint -> 255, the rest -> 0."""
+    return binarize_channel(to_channel(image_bgr, projection), method)
+
+
+def binarize_channel(gray: np.ndarray, method: str = DEFAULT_METHOD) -> Binarized:
+    """Threshold one channel (uint8) in which the marks to find are bright."""
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-    gray = to_gray(image_bgr)
     smooth = cv2.GaussianBlur(gray, (5, 5), 1.0)
     if method == "otsu":
         t, mask = cv2.threshold(smooth, 0, 255, cv2.THRESH_BINARY | cv2.THRESH_OTSU)

@@ -1,7 +1,8 @@
-"""The reference pad: what the H looks like, measured once from a top-down picture."""
+"""The reference pad: what the H looks like, learned once from a top-down picture."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from functools import cached_property
@@ -9,27 +10,39 @@ from functools import cached_property
 import cv2
 import numpy as np
 
+from pipeline.colour import Projection, contrast, learn_projection
 from pipeline.edgefit import EdgeModel
-from pipeline.edges import refine_polygon, surround_ratio
+from pipeline.edges import refine_polygon
+from pipeline.hfit import HFit, fit_h
+from pipeline.marks import Mark, find_marks, symmetric_marks
 from pipeline.moments import shape_moments
-from pipeline.preprocess import binarize, check_image
-from pipeline.shapes import corner_angles, polygon_corners, regions
+from pipeline.preprocess import check_image
+from pipeline.shape_match import ShapeMatcher
+from pipeline.template import reference_pyramid
 
 H_CORNERS = 12
 _WORK_MAX = 1024  # pictures are measured at up to this many pixels a side
+_LEVELS = 9  # thresholds tried per channel between its 2nd and 98th percentiles
+_MIN_H_AREA = 0.002  # of the picture: smaller marks are text or noise, not the pad's H
+_MAX_H_AREA = 0.6
+_MIN_CONTRAST = 25.0  # H against its board on the learned channel, 0..255
 
 
 @dataclass(frozen=True, eq=False)
 class Reference:
-    """A helipad's H (and its side bars) in pad metres.
+    """A helipad's H (and its other straight marks) in pad metres.
 
     Built by :meth:`from_image` from a top-down picture cropped to the pad's
     outer edge. ``corners_m``: the H's 12 corners in the pad frame (origin at
     the pad centre, +x to the picture's right, +y to its top), in contour
-    order, the order every detection reports. ``bars_m``: other straight-sided
-    white marks of the pad (the seed's side bars), 4 corners each, used to
-    refine the pose over the whole pad. ``symmetric``: the pad looks the same
-    after a 180 degree turn.
+    order, the order every detection reports: those of the block H under any
+    serifs. ``marks``: the pad's other edges (the seed's side bars, rings, a
+    disc's or a board's rim, stars: ``pipeline.marks``), which refine the pose
+    over the whole pad and tell an asymmetric pad's heading. ``symmetric``:
+    the pad looks the same after a 180 degree turn.
+    ``projection``: the colour channel in which the H is bright and its board
+    dark (frames are searched on it). ``contrast``: H minus board on that
+    channel. ``leg_fraction``: the thinner leg's width over the H's width.
     """
 
     pad_size_m: float
@@ -38,22 +51,67 @@ class Reference:
     mask: np.ndarray
     corners_px: np.ndarray
     corners_m: np.ndarray
-    bars_m: tuple[np.ndarray, ...]
-    outline_m: np.ndarray | None
+    marks: tuple[Mark, ...]
     hu: tuple[float, ...]
     orientation_deg: float
     eccentricity: float
     solidity: float
     symmetric: bool
-    surround_ratio: float
+    projection: Projection
+    contrast: float
+    leg_fraction: float
+    channel: np.ndarray  # the picture on the learned channel (work resolution)
+    channel_px_per_m: float
 
     @cached_property
     def edge_model(self) -> EdgeModel:
-        """Every straight side of the pad: the H's, the bars' and the outline's."""
-        marks = [(self.corners_m, True)] + [(bar, True) for bar in self.bars_m]
-        if self.outline_m is not None:
-            marks.append((self.outline_m, False))
-        return EdgeModel.from_polygons(marks)
+        """Every side of the pad: the H's and its other marks'."""
+        polys = [(self.corners_m, True)] + [(m.corners_m, m.bright) for m in self.marks]
+        return EdgeModel.from_polygons(polys)
+
+    @cached_property
+    def marks_model(self) -> EdgeModel | None:
+        """The sides of the marks alone (None when the pad has none)."""
+        if not self.marks:
+            return None
+        return EdgeModel.from_polygons([(m.corners_m, m.bright) for m in self.marks])
+
+    @cached_property
+    def pose_points_m(self) -> np.ndarray:
+        """The pad's points a pose is fitted to: the H's corners and the marks' vertices."""
+        return np.vstack([self.corners_m, *(m.corners_m for m in self.marks)])
+
+    def is_paint(self, points_m: np.ndarray) -> np.ndarray:
+        """Whether the reference picture shows the H's paint (the H or a mark of its
+        colour) at each pad point (N x 2 metres); points off the picture are not."""
+        h, w = self.mask.shape
+        pts = np.asarray(points_m, np.float64).reshape(-1, 2)
+        u = np.round(pts[:, 0] * self.channel_px_per_m + w / 2.0 - 0.5).astype(int)
+        v = np.round(h / 2.0 - pts[:, 1] * self.channel_px_per_m - 0.5).astype(int)
+        inside = (u >= 0) & (u < w) & (v >= 0) & (v < h)
+        out = np.zeros(len(pts), bool)
+        out[inside] = self.mask[v[inside], u[inside]] > 0
+        return out
+
+    @cached_property
+    def h_edges(self) -> EdgeModel:
+        """The H's own sides: what a frame must show for a detection."""
+        return EdgeModel.from_polygons([(self.corners_m, True)])
+
+    @cached_property
+    def shape(self) -> ShapeMatcher:
+        """The H's outline for affine-invariant comparison with a frame's regions."""
+        return ShapeMatcher.from_polygon(self.corners_m, symmetric=self.symmetric)
+
+    @cached_property
+    def template_pyramid(self) -> tuple[np.ndarray, ...]:
+        """The picture and its learned channel at halving resolutions, for comparing
+        frames with it."""
+        h, w = self.channel.shape[:2]
+        picture = self.image
+        if picture.shape[:2] != (h, w):
+            picture = cv2.resize(picture, (w, h), interpolation=cv2.INTER_AREA)
+        return reference_pyramid(picture, self.channel)
 
     @property
     def h_size_m(self) -> float:
@@ -61,18 +119,28 @@ class Reference:
         span = self.corners_m.max(axis=0) - self.corners_m.min(axis=0)
         return float(span.max())
 
+    @property
+    def polarity(self) -> str:
+        """ "bright" for a light H on a darker board, "dark" for the opposite."""
+        return self.projection.polarity
+
     @classmethod
     def from_image(cls, image_bgr: np.ndarray, pad_size_m: float) -> Reference:
-        """Measure the H on a top-down picture of the pad whose width is ``pad_size_m``.
+        """Learn the H on a top-down picture of the pad whose width is ``pad_size_m``.
 
-        Raises ValueError saying what is wrong when the picture holds no usable H.
+        Any colours and polarity, stroke widths down to ~8 % of the H's width,
+        serifs, rings, stars or text around it. Raises ValueError saying what
+        is wrong when the picture holds no usable H.
 
         Examples
         --------
         >>> from pipeline.render import make_pad_image
         >>> ref = Reference.from_image(make_pad_image(800), 0.55)
-        >>> ref.corners_m.shape, ref.symmetric
-        ((12, 2), True)
+        >>> ref.corners_m.shape, ref.symmetric, ref.polarity
+        ((12, 2), True, 'bright')
+        >>> dark = Reference.from_image(255 - make_pad_image(800), 0.55)
+        >>> dark.polarity, bool(np.allclose(dark.corners_m, ref.corners_m, atol=1e-3))
+        ('dark', True)
         """
         image = check_image(image_bgr, "image_bgr")
         try:
@@ -87,68 +155,57 @@ class Reference:
         if scale < 1.0:
             size = (round(w_img * scale), round(h_img * scale))
             work = cv2.resize(image, size, interpolation=cv2.INTER_AREA)
-        # A top-down picture has even light, and its H may be hundreds of pixels
-        # wide: a global threshold keeps its strokes whole.
-        binary = binarize(work, "otsu")
-        wh, ww = binary.mask.shape
-        area = float(wh * ww)
-        found = regions(binary.mask, min_area=0.002 * area, max_area=0.6 * area)
-        if not found:
+        wh, ww = work.shape[:2]
+        found = _find_h(work)
+        if isinstance(found, str):
+            raise ValueError(found)
+        fit, region = found
+        h_mask, board_mask = _h_and_board(region, fit)
+        projection = learn_projection(work, h_mask, board_mask)
+        channel = projection.apply(work)
+        smooth = cv2.GaussianBlur(channel, (5, 5), 1.0)
+        h_contrast = contrast(smooth, h_mask, board_mask)
+        if h_contrast < _MIN_CONTRAST:
             raise ValueError(
-                "no white shape found on the picture: expected a white H on a dark pad, "
-                "cropped to the pad's outer edge"
+                f"the H barely stands out from its board (contrast {h_contrast:.0f} of 255): "
+                "take the picture in even light, straight from above"
             )
-        h_region, h_poly, reasons = _pick_h(found, ww, wh)
-        if h_region is None:
-            raise ValueError(
-                f"no usable H on the picture: {len(found)} white shape(s) found, none is an H "
-                f"({'; '.join(reasons[:3])})"
-            )
-        refined = refine_polygon(binary.smooth, h_poly)
-        if refined is not None:
-            h_poly = refined[0]
-        bars = []
-        for r in found:
-            if r is h_region or r.solidity < 0.93 or r.area < 0.004 * area:
-                continue
-            quad = polygon_corners(r.contour, 4)
-            if quad is None:
-                continue
-            ang = corner_angles(quad)
-            if np.all(np.abs(ang - 90.0) < 12.0):
-                rq = refine_polygon(binary.smooth, quad)
-                bars.append(rq[0] if rq is not None else quad)
+        board_level = float(smooth[board_mask].mean())
+        level = 0.5 * (float(smooth[h_mask].mean()) + board_level)
+        mask = np.where(smooth > level, 255, 0).astype(np.uint8)
+        # The H was found at whichever threshold shaped it best; on the learned
+        # channel, half-way between the paint and the board is where its edges are.
+        fit = _refit(mask, region, fit)
+        refined = refine_polygon(smooth, fit.corners)
+        h_poly = refined[0] if refined is not None else fit.corners
         to_m = _pixels_to_metres(ww, wh, pad_size_m)
         corners_m = to_m(h_poly)
-        bars_m = tuple(to_m(b) for b in bars)
-        # The picture's edge is the board's outer edge when the board is dark
-        # there; it then refines the pose over the pad's full width.
-        rim = np.concatenate(
-            [binary.mask[0], binary.mask[-1], binary.mask[:, 0], binary.mask[:, -1]]
+        marks = tuple(
+            Mark(to_m(poly), bright)
+            for poly, bright in find_marks(smooth, level, board_level, region)
         )
-        outline = np.array([[-0.5, -0.5], [ww - 0.5, -0.5], [ww - 0.5, wh - 0.5], [-0.5, wh - 0.5]])
-        outline_m = to_m(outline) if np.mean(rim > 0) < 0.02 else None
-        mom = shape_moments(h_region.contour)
-        # How dark the pad is right around the H, relative to the H: frames must
-        # show the same (a look-alike painted on a floor does not).
-        h_span_px = float(np.ptp(h_poly, axis=0).max())
-        surround = surround_ratio(binary.smooth, h_poly, max(2.5, 0.03 * h_span_px))
+        contour = _outer_contour(region)
+        mom = shape_moments(contour)
+        hull = cv2.contourArea(cv2.convexHull(contour.reshape(-1, 1, 2).astype(np.int32)))
         corners_px = (h_poly + 0.5) / scale - 0.5
         return cls(
             pad_size_m=pad_size_m,
             pad_height_m=pad_size_m * wh / ww,
             image=image,
-            mask=binary.mask,
+            mask=mask,
             corners_px=corners_px,
             corners_m=corners_m,
-            bars_m=bars_m,
-            outline_m=outline_m,
+            marks=marks,
             hu=tuple(float(v) for v in mom.hu),
             orientation_deg=float(mom.orientation_deg),
             eccentricity=float(mom.eccentricity),
-            solidity=float(h_region.solidity),
-            symmetric=_is_symmetric(corners_m, bars_m),
-            surround_ratio=surround,
+            solidity=float(np.count_nonzero(region) / hull) if hull > 0 else 0.0,
+            symmetric=symmetric_marks(corners_m, marks),
+            projection=projection,
+            contrast=h_contrast,
+            leg_fraction=fit.leg_fraction,
+            channel=channel,
+            channel_px_per_m=ww / pad_size_m,
         )
 
     def to_dict(self) -> dict:
@@ -158,51 +215,148 @@ class Reference:
             "image_size": [int(self.image.shape[1]), int(self.image.shape[0])],
             "corners_m": self.corners_m.tolist(),
             "corners_px": self.corners_px.tolist(),
-            "bars_m": [b.tolist() for b in self.bars_m],
-            "outline_m": None if self.outline_m is None else self.outline_m.tolist(),
+            "marks": [m.to_dict() for m in self.marks],
             "hu": list(self.hu),
             "orientation_deg": self.orientation_deg,
             "eccentricity": self.eccentricity,
             "solidity": self.solidity,
             "symmetric": self.symmetric,
-            "surround_ratio": self.surround_ratio,
+            "projection": self.projection.to_dict(),
+            "contrast": self.contrast,
+            "leg_fraction": self.leg_fraction,
         }
 
 
-def _pick_h(found, width: int, height: int):
-    """The region nearest the picture's centre with the corners of a block H."""
-    centre = np.array([width / 2.0, height / 2.0])
-    reasons: list[str] = []
-    best = (None, None, math.inf)
-    for r in found:
-        if not 0.35 <= r.solidity <= 0.92:
-            reasons.append(f"a shape of solidity {r.solidity:.2f}")
+def _channels(work: np.ndarray) -> list[tuple[str, np.ndarray]]:
+    """Gray and the colour-opponent channels, smoothed, where an H may stand out."""
+    lab = cv2.cvtColor(work, cv2.COLOR_BGR2LAB)
+    b, _, r = cv2.split(work)
+    chans = [
+        ("gray", cv2.cvtColor(work, cv2.COLOR_BGR2GRAY)),
+        ("a", lab[..., 1]),
+        ("b", lab[..., 2]),
+        ("blue", b),
+        ("red", r),
+    ]
+    out = []
+    for name, c in chans:
+        s = cv2.GaussianBlur(c, (5, 5), 1.0)
+        out.append((name, s))
+        out.append((name + "-", 255 - s))
+    return out
+
+
+def _find_h(work: np.ndarray) -> tuple[HFit, np.ndarray] | str:
+    """The pad's H: the region, over channels, polarities and thresholds, most like a
+    block H (the one nearest the centre among equals). Returns (fit, region mask)
+    or a sentence saying what was found instead."""
+    wh, ww = work.shape[:2]
+    area = float(wh * ww)
+    centre = np.array([ww / 2.0, wh / 2.0])
+    best: tuple[float, float, HFit, np.ndarray] | None = None
+    shapes = 0
+    seen: set[tuple[int, int, int, int]] = set()
+    for _name, chan in _channels(work):
+        lo, hi = np.percentile(chan, [2, 98])
+        if hi - lo < _MIN_CONTRAST:
             continue
-        poly = polygon_corners(r.contour, H_CORNERS)
-        if poly is None:
-            reasons.append("a shape without 12 corners")
-            continue
-        if not _h_topology(corner_angles(poly)):
-            reasons.append("a 12-cornered shape whose corners are not those of an H")
-            continue
-        dist = float(np.linalg.norm(r.contour.mean(axis=0) - centre))
-        if dist < best[2]:
-            best = (r, poly, dist)
-    return best[0], best[1], reasons
+        for level in np.linspace(lo, hi, _LEVELS + 2)[1:-1]:
+            binary = (chan > level).astype(np.uint8)
+            n, labels, stats, cents = cv2.connectedComponentsWithStats(binary, connectivity=8)
+            for k in range(1, n):
+                x, y, w, h, a = stats[k]
+                if not _MIN_H_AREA * area <= a <= _MAX_H_AREA * area:
+                    continue
+                if x == 0 or y == 0 or x + w == ww or y + h == wh:
+                    continue  # the H lies inside the picture
+                if a > 0.95 * w * h:
+                    continue  # a filled box
+                key = (x // 4, y // 4, w // 4, h // 4)
+                if key in seen:
+                    continue  # the same shape at another threshold or in another channel
+                seen.add(key)
+                shapes += 1
+                region = labels[y : y + h, x : x + w] == k
+                crop = np.zeros((h + 4, w + 4), np.uint8)
+                crop[2:-2, 2:-2] = region
+                fit = fit_h(crop)
+                if fit is None:
+                    continue
+                fit = HFit(
+                    corners=fit.corners + np.array([x - 2, y - 2]),
+                    iou=fit.iou,
+                    width_px=fit.width_px,
+                    height_px=fit.height_px,
+                    leg_widths=fit.leg_widths,
+                    crossbar=fit.crossbar,
+                )
+                off = float(np.linalg.norm(cents[k] - centre)) / math.hypot(ww, wh)
+                # Serifs and anti-aliasing cost a little IoU; the pad's own H is
+                # central, and of two thresholds of one H the better fit wins.
+                score = fit.iou - 0.3 * off
+                if best is None or score > best[0]:
+                    full = np.zeros((wh, ww), bool)
+                    full[y : y + h, x : x + w] = region
+                    best = (score, fit.iou, fit, full)
+    if best is None:
+        if shapes == 0:
+            return (
+                "no shape stands out on the picture: expected a pad whose H contrasts "
+                "with its board, cropped to the pad's outer edge"
+            )
+        return (
+            f"no usable H on the picture: {shapes} shape(s) examined over gray and colour "
+            "channels, none has the two legs and crossbar of an H"
+        )
+    return best[2], best[3]
 
 
-# Going round a block H: two outer corners, the two inner corners where the
-# crossbar meets the legs, four outer corners, two inner corners, two outer.
-_H_CONCAVE = np.array([0, 0, 1, 1, 0, 0, 0, 0, 1, 1, 0, 0], bool)
+def _refit(mask: np.ndarray, region: np.ndarray, fit: HFit) -> HFit:
+    """The block H fitted again to the H's region of ``mask`` (the one that covers
+    most of the region first found), or the first fit when that fails."""
+    n, labels = cv2.connectedComponents((mask > 0).astype(np.uint8))
+    counts = np.bincount(labels[region], minlength=n)
+    counts[0] = 0
+    k = int(counts.argmax())
+    if counts[k] == 0:
+        return fit
+    ys, xs = np.nonzero(labels == k)
+    x0, y0 = xs.min(), ys.min()
+    crop = np.zeros((ys.max() - y0 + 5, xs.max() - x0 + 5), np.uint8)
+    crop[ys - y0 + 2, xs - x0 + 2] = 255
+    again = fit_h(crop)
+    if again is None:
+        return fit
+    return dataclasses.replace(again, corners=again.corners + np.array([x0 - 2, y0 - 2]))
 
 
-def _h_topology(angles: np.ndarray) -> bool:
-    """Whether 12 corner angles run like an H's (a '+' has 12 right angles too)."""
-    convex = np.abs(angles - 90.0) < 20.0
-    concave = np.abs(angles - 270.0) < 20.0
-    if not np.all(convex | concave):
-        return False
-    return any(np.array_equal(concave, np.roll(_H_CONCAVE, k)) for k in range(12))
+def _h_and_board(region: np.ndarray, fit: HFit) -> tuple[np.ndarray, np.ndarray]:
+    """The H's inner pixels and the board's pixels right around it (and between its legs)."""
+    leg = max(1.0, min(fit.leg_widths))
+    r_in = max(2, round(0.2 * leg))
+    r_out = max(r_in + 3, round(1.0 * leg))
+    reg = region.astype(np.uint8)
+    core = cv2.erode(reg, _disc(max(1, round(0.2 * leg)))) > 0
+    if np.count_nonzero(core) < 10:
+        core = region
+    near = cv2.dilate(reg, _disc(r_in)) > 0
+    far = cv2.dilate(reg, _disc(r_out)) > 0
+    hull = np.zeros_like(reg)
+    cv2.fillConvexPoly(hull, cv2.convexHull(fit.corners.astype(np.int32)), 1)
+    board = (far | (hull > 0)) & ~near
+    return core, board
+
+
+def _disc(radius: int) -> np.ndarray:
+    return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * radius + 1, 2 * radius + 1))
+
+
+def _outer_contour(region: np.ndarray) -> np.ndarray:
+    contours, _ = cv2.findContours(
+        region.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE
+    )
+    c = max(contours, key=cv2.contourArea)
+    return c.reshape(-1, 2)[::-1].copy()
 
 
 def _pixels_to_metres(width: int, height: int, pad_size_m: float):
@@ -215,12 +369,3 @@ def _pixels_to_metres(width: int, height: int, pad_size_m: float):
         return np.column_stack([x, y])
 
     return convert
-
-
-def _is_symmetric(corners_m: np.ndarray, bars_m: tuple[np.ndarray, ...]) -> bool:
-    """Whether a 180 degree turn about the pad centre maps every corner onto one."""
-    tol = 0.03 * float(np.ptp(corners_m, axis=0).max())
-    pts = np.vstack([corners_m, *bars_m]) if bars_m else corners_m
-    turned = -pts
-    d = np.linalg.norm(turned[:, None, :] - pts[None, :, :], axis=2)
-    return bool(np.all(d.min(axis=1) < tol))

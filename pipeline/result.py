@@ -63,7 +63,9 @@ class FrameResult:
     invariants of the H's region (NaN, JSON null, when nothing was found).
     ``timings_ms``: wall time per stage. ``contour_px``: the H's boundary.
     ``score``: the share of the pad's edges found where the pose puts them
-    (0..1). ``reason``: why nothing was detected.
+    (0..1). ``reason``: why nothing was detected. ``mask``: the threshold mask
+    the pipeline worked on (uint8, 0/255, at its working size: frames wider
+    than 640 px are subsampled), for showing; not part of :meth:`to_dict`.
     """
 
     detected: bool
@@ -76,6 +78,7 @@ class FrameResult:
     contour_px: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     score: float = 0.0
     reason: str = ""
+    mask: np.ndarray | None = field(default=None, repr=False)
 
     def to_dict(self) -> dict:
         return {

@@ -1,4 +1,10 @@
-"""FastAPI dependencies as ``Annotated`` aliases: the station, the operator token."""
+"""FastAPI dependencies as ``Annotated`` aliases: the services, the operator token.
+
+Routes depend on the services of the running station (``backend.services``), never
+on the storage or the station's other parts. The token is the operator's bearer
+token (OpenAPI security scheme ``OperatorToken``); viewing needs it only when the
+``view_requires_token`` setting is on.
+"""
 
 from __future__ import annotations
 
@@ -6,28 +12,84 @@ import secrets
 from typing import Annotated
 
 from fastapi import Depends, Header, HTTPException, Path, Request, status
+from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 
+from backend.missions.manager import MissionManager
+from backend.services.events import EventLog
+from backend.services.flights import FlightService
+from backend.services.references import ReferenceService
+from backend.services.runtime import RuntimeSettings
+from backend.services.status import StatusService
+from backend.services.vehicle import VehicleService
 from backend.station import Station
 
 _BEARER_HINT = (
     "send it as 'Authorization: Bearer <token>' (printed at start, kept in DATA_DIR/token)"
 )
+_TOKEN_DOC = "The operator token, printed at start and kept in DATA_DIR/token."
+
+# For the OpenAPI document only: the checks below read the header themselves, so that
+# a malformed header gets its own sentence.
+operator_scheme = HTTPBearer(auto_error=False, scheme_name="OperatorToken", description=_TOKEN_DOC)
+viewer_scheme = HTTPBearer(auto_error=False, scheme_name="ViewerToken", description=_TOKEN_DOC)
 
 
 def get_station(request: Request) -> Station:
-    """The running station of this app."""
-    return request.app.state.station
+    """The running station of this app (503 while it is not running)."""
+    station: Station | None = getattr(request.app.state, "station", None)
+    if station is None or not station.started:
+        raise HTTPException(status.HTTP_503_SERVICE_UNAVAILABLE, "The station is not running.")
+    return station
 
 
 StationDep = Annotated[Station, Depends(get_station)]
+
+
+def _events(station: StationDep) -> EventLog:
+    return station.events
+
+
+def _runtime(station: StationDep) -> RuntimeSettings:
+    return station.runtime
+
+
+def _references(station: StationDep) -> ReferenceService:
+    return station.references
+
+
+def _flights(station: StationDep) -> FlightService:
+    return station.flights
+
+
+def _vehicle(station: StationDep) -> VehicleService:
+    return station.vehicle
+
+
+def _missions(station: StationDep) -> MissionManager:
+    return station.missions
+
+
+def _status(station: StationDep) -> StatusService:
+    return station.status
+
+
+EventsDep = Annotated[EventLog, Depends(_events)]
+RuntimeDep = Annotated[RuntimeSettings, Depends(_runtime)]
+ReferencesDep = Annotated[ReferenceService, Depends(_references)]
+FlightsDep = Annotated[FlightService, Depends(_flights)]
+VehicleDep = Annotated[VehicleService, Depends(_vehicle)]
+MissionsDep = Annotated[MissionManager, Depends(_missions)]
+StatusDep = Annotated[StatusService, Depends(_status)]
 
 # Ids are SQLite integers: anything outside 1..2**63-1 cannot name a row.
 _MAX_ID = 2**63 - 1
 RefId = Annotated[int, Path(ge=1, le=_MAX_ID, description="a reference's id")]
 FlightId = Annotated[int, Path(ge=1, le=_MAX_ID, description="a flight's id")]
+RunId = Annotated[int, Path(ge=1, le=_MAX_ID, description="a mission run's id")]
 
 
-def _check_token(station: Station, authorization: str | None) -> None:
+def check_token(expected: str, authorization: str | None) -> None:
+    """401 with a sentence unless ``authorization`` is ``Bearer <expected>``."""
     if not authorization:
         raise HTTPException(
             status.HTTP_401_UNAUTHORIZED,
@@ -41,7 +103,7 @@ def _check_token(station: Station, authorization: str | None) -> None:
             f"The Authorization header must be 'Bearer <token>': {_BEARER_HINT}.",
             headers={"WWW-Authenticate": "Bearer"},
         )
-    if not secrets.compare_digest(token.strip().encode(), station.token.encode()):
+    if not secrets.compare_digest(token.strip().encode(), expected.encode()):
         raise HTTPException(
             status.HTTP_401_UNAUTHORIZED,
             "The operator token is wrong; nothing was done.",
@@ -49,19 +111,24 @@ def _check_token(station: Station, authorization: str | None) -> None:
         )
 
 
+AuthorizationHeader = Annotated[str | None, Header(include_in_schema=False)]
+_OperatorDoc = Annotated[HTTPAuthorizationCredentials | None, Depends(operator_scheme)]
+_ViewerDoc = Annotated[HTTPAuthorizationCredentials | None, Depends(viewer_scheme)]
+
+
 def require_operator(
-    station: StationDep, authorization: Annotated[str | None, Header()] = None
+    station: StationDep, _doc: _OperatorDoc, authorization: AuthorizationHeader = None
 ) -> None:
     """Commands and uploads: a valid operator token or 401."""
-    _check_token(station, authorization)
+    check_token(station.token, authorization)
 
 
 def require_viewer(
-    station: StationDep, authorization: Annotated[str | None, Header()] = None
+    station: StationDep, _doc: _ViewerDoc, authorization: AuthorizationHeader = None
 ) -> None:
     """Viewing: open unless the view_requires_token setting is on."""
-    if station.runtime.get("view_requires_token"):
-        _check_token(station, authorization)
+    if station.runtime.view_requires_token:
+        check_token(station.token, authorization)
 
 
 Operator = Depends(require_operator)

@@ -7,9 +7,10 @@ Consumers pull: ``latest()`` or ``wait_frame(after_seq, timeout)``.
 >>> src = open_source("opencv:0")        # doctest: +SKIP
 >>> src.start(); frame = src.wait_frame(-1, timeout=5.0); src.close()  # doctest: +SKIP
 
-Specs accepted by :func:`open_source`: ``"sim"`` (needs ``vehicle_pose=`` callable),
-``"cmucam4:/dev/ttyUSB0"``, ``"opencv:0"`` (device index), ``"opencv:path/to/file.mp4"``,
-``"opencv:rtsp://..."``. Live 30 Hz guidance from a CMUcam4 needs its analog video out
+Specs accepted by :func:`open_source`: ``"cmucam4:/dev/ttyUSB0"``, ``"opencv:0"``
+(device index), ``"opencv:path/to/file.mp4"``, ``"opencv:rtsp://..."``. The simulated
+camera is part of the test rig (``sim.camera``): the station opens it itself when the
+user asks for ``camera="sim"``. Live 30 Hz guidance from a CMUcam4 needs its analog video out
 through a USB capture device (``opencv:N``): serial ``SF`` frames take seconds each.
 """
 
@@ -336,7 +337,6 @@ def _describe(exc: BaseException) -> str:
 def open_source(spec: str, **kw: Any) -> FrameSource:
     """Make a (not yet started) source from a spec string.
 
-    ``"sim"`` (keyword ``vehicle_pose`` required, ``config`` optional),
     ``"cmucam4:/dev/ttyUSB0"``, ``"opencv:0"``, ``"opencv:video.mp4"``,
     ``"opencv:rtsp://host/stream"``. Extra keywords go to the source's constructor.
     """
@@ -347,13 +347,10 @@ def open_source(spec: str, **kw: Any) -> FrameSource:
     kind, _, target = spec.strip().partition(":")
     kind = kind.lower()
     if kind == "sim":
-        if target:
-            raise ValueError(f"spec 'sim' takes no target, got {spec!r}")
-        if "vehicle_pose" not in kw:
-            raise ValueError("spec 'sim' needs vehicle_pose=<callable returning VehiclePose>")
-        from backend.camera.sim_source import SimCamera
-
-        return SimCamera(**kw)
+        raise ValueError(
+            "spec 'sim' is the simulated camera of the test rig: make it with "
+            "sim.camera.SimCamera (the station does when camera='sim')"
+        )
     if kind == "cmucam4":
         from backend.camera.cmucam4 import CMUcam4Source
 
@@ -367,5 +364,5 @@ def open_source(spec: str, **kw: Any) -> FrameSource:
             raise ValueError(f"spec {spec!r} needs a device index, file or URL, e.g. 'opencv:0'")
         return OpenCVSource(int(target) if target.isdigit() else target, **kw)
     raise ValueError(
-        f"unknown camera spec {spec!r}: use 'sim', 'cmucam4:<port>' or 'opencv:<index|file|url>'"
+        f"unknown camera spec {spec!r}: use 'cmucam4:<port>' or 'opencv:<index|file|url>'"
     )

@@ -13,6 +13,10 @@ analog video out through a USB capture device, read with the OpenCV source (``op
 CLI::
 
     python -m backend.camera.cmucam4 /dev/ttyUSB0 --snapshot out.png [--res 160x120]
+
+Why one module of ~900 lines: it is one serial protocol, and the driver, its frame
+source and its CLI share the command and resynchronisation machinery; split, each
+part would reach into the others' internals.
 """
 
 from __future__ import annotations
@@ -684,19 +688,20 @@ class PacketStream:
                     vals = _parse_ints(tok, "T", 8)
                     bitmap = self._bitmap()
                     self.packets += 1
-                    return TPacket(*vals, t=now, bitmap=bitmap)
+                    mx, my, x1, y1, x2, y2, pixels, confidence = vals
+                    return TPacket(mx, my, x1, y1, x2, y2, pixels, confidence, t=now, bitmap=bitmap)
                 if tok.startswith("S "):
                     vals = _parse_ints(tok, "S", 12)
                     bitmap = self._bitmap()
                     self.packets += 1
                     return SPacket(
-                        tuple(vals[0:3]),
-                        tuple(vals[3:6]),
-                        tuple(vals[6:9]),
-                        tuple(vals[9:12]),
+                        (vals[0], vals[1], vals[2]),
+                        (vals[3], vals[4], vals[5]),
+                        (vals[6], vals[7], vals[8]),
+                        (vals[9], vals[10], vals[11]),
                         t=now,
                         bitmap=bitmap,
-                    )  # type: ignore[arg-type]
+                    )
             except ValueError:
                 pass
             self._open = False

@@ -83,7 +83,7 @@ class OpenCVSource(ThreadedSource):
             cv2.CAP_PROP_READ_TIMEOUT_MSEC,
             self._read_timeout_ms,
         ]
-        if self.kind == "file" and not Path(self.target).is_file():
+        if self.kind == "file" and not Path(str(self.target)).is_file():
             raise CaptureError(f"no video file at {self.target}")
         cap = cv2.VideoCapture(self.target, cv2.CAP_ANY, params)
         if not cap.isOpened():

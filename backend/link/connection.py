@@ -266,6 +266,7 @@ class Transport:
         spec = self.spec
         ids = {"source_system": self.source_system, "source_component": self.source_component}
         if spec.kind == "tcp":
+            assert spec.host is not None and spec.port is not None  # parse_url sets both
             conn: Any = _TcpConnection(spec.host, spec.port, timeout=self.connect_timeout_s, **ids)
         elif spec.kind in ("udpin", "udpout"):
             conn = mavutil.mavlink_connection(f"{spec.kind}:{spec.host}:{spec.port}", **ids)

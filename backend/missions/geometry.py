@@ -1,6 +1,6 @@
 """From one vision pose to what guidance needs: the pad relative to the vehicle.
 
-Frames (as in ``backend.camera.sim_source``): local NED; body FRD with
+Frames (as in ``sim.camera``): local NED; body FRD with
 ``R_ned_body = Rz(yaw) Ry(pitch) Rx(roll)`` (MAVLink ATTITUDE); camera (OpenCV: x right,
 y down, z forward) with ``R_body_cam`` the mount; pad frame (x picture right, y picture
 top, z up) with ``Pose.position_m`` the camera centre and ``Pose.R_pad_cam``.
@@ -101,19 +101,18 @@ def pad_fix(
 ) -> PadFix:
     """Turn a vision pose into a :class:`PadFix`.
 
-        ``attitude_rpy``: the vehicle's roll, pitch, yaw (rad) when the frame was taken,
-        used only to express the offset in NED; the body-frame target and the heading
-        error come from the vision pose alone.
+    ``attitude_rpy``: the vehicle's roll, pitch, yaw (rad) when the frame was taken,
+    used only to express the offset in NED; the body-frame target and the heading
+    error come from the vision pose alone.
 
-        Examples
-        --------
-        >>> from backend.frames import rot_ned_body
-    from pipeline import Camera, Pose
-        >>> R = np.diag([1.0, -1.0, -1.0])  # looking down, picture upright
-        >>> pose = Pose(np.array([0.2, -0.1, 3.0]), R, 0.5, True)  # 0.2 m east, 0.1 m south
-        >>> fix = pad_fix(pose, Camera.from_fov(640, 480, 60), (0, 0, 0), t_capture=0, time_usec=0)
-        >>> [round(v, 2) for v in fix.target_frd], round(fix.heading_error_deg, 1)
-        ([0.1, -0.2, 3.0], 0.0)
+    Examples
+    --------
+    >>> from pipeline import Camera, Pose
+    >>> R = np.diag([1.0, -1.0, -1.0])  # looking down, picture upright
+    >>> pose = Pose(np.array([0.2, -0.1, 3.0]), R, 0.5, True)  # 0.2 m east, 0.1 m south
+    >>> fix = pad_fix(pose, Camera.from_fov(640, 480, 60), (0, 0, 0), t_capture=0, time_usec=0)
+    >>> [round(v, 2) for v in fix.target_frd], round(fix.heading_error_deg, 1)
+    ([0.1, -0.2, 3.0], 0.0)
     """
     R_pc = np.asarray(pose.R_pad_cam, float)
     p = np.asarray(pose.position_m, float).reshape(3)

@@ -1,9 +1,13 @@
 """Runs one mission at a time for the station, in real time, on its own thread.
 
-The thread steps the mission every ``period_s`` with the vision worker's newest
-result, stores the run (``mission_runs``: started at once, finished with the whole
-record), reports state changes as station events and hands a live snapshot to the
-listeners (the WebSocket hub) at every step where something moved.
+The thread is woken by each new vision result (its slot on the frame bus) and steps
+the mission with it at once, so guidance goes out as soon as the pad is seen. Each
+step has its result, as in the lockstep scenarios (a step without one would count as
+"pad not seen"); only when no result comes for ``period_s`` (a stalled camera) does it
+step without one, for the timeouts and failsafes. An abort wakes it at once. It stores the run
+(``mission_runs``: started at once, finished with the whole record), reports state
+changes as station events and hands a live snapshot to ``notify`` (the status
+service) at every step where something moved.
 """
 
 from __future__ import annotations
@@ -14,14 +18,18 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from backend.framebus import FrameBus
 from backend.missions.config import HoverConfig, LandConfig
 from backend.missions.hover import HoverMission
 from backend.missions.land import LandMission
 from backend.missions.mission import Mission, VisionSample
+from backend.storage import Storage
+from backend.vision_worker import Processed
 
 log = logging.getLogger(__name__)
 
-PERIOD_S = 0.05
+#: Step without a result after this long (longer than a frame of a 10 Hz camera).
+PERIOD_S = 0.2
 JOIN_TIMEOUT_S = 5.0
 #: Live snapshots at most this often (the dashboard panel; the state changes go at once).
 SNAPSHOT_PERIOD_S = 0.2
@@ -38,14 +46,15 @@ class MissionManager:
     ----------
     link : VehicleLink
         The station's link.
-    latest : callable
-        Returns the vision worker's newest ``Processed`` (or None).
+    results : FrameBus
+        The vision results; the manager takes them from its own slot while a
+        mission runs.
     storage : Storage or None
         Where runs are stored.
     emit_event : callable
         ``emit_event(kind, text, data)``: the station's event log.
-    notify : callable
-        ``notify(snapshot)``: the live state, for the WebSocket hub.
+    notify : callable or None
+        ``notify(snapshot)``: the live state (more listeners: :meth:`listen`).
     period_s : float
         Control period.
     """
@@ -53,20 +62,22 @@ class MissionManager:
     def __init__(
         self,
         link: Any,
-        latest: Callable[[], Any],
-        storage: Any,
-        emit_event: Callable[[str, str, dict], Any],
-        notify: Callable[[dict], None],
+        results: FrameBus[Processed],
+        storage: Storage | None,
+        emit_event: Callable[[str, str, dict[str, Any]], Any],
+        notify: Callable[[dict[str, Any]], None] | None = None,
         *,
         period_s: float = PERIOD_S,
     ) -> None:
         if not period_s > 0:
             raise ValueError(f"period_s must be > 0, got {period_s!r}")
         self.link = link
-        self._latest = latest
+        self._results = results.subscribe("missions", wanted=lambda: self.running)
         self.storage = storage
         self._emit = emit_event
-        self._notify = notify
+        self._listeners: tuple[Callable[[dict[str, Any]], None], ...] = ()
+        if notify is not None:
+            self.listen(notify)
         self.period_s = float(period_s)
         self._lock = threading.Lock()
         self._mission: Mission | None = None
@@ -74,6 +85,17 @@ class MissionManager:
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
         self._last: Mission | None = None
+
+    def listen(self, listener: Callable[[dict[str, Any]], None]) -> None:
+        """Call ``listener(snapshot)`` with the live state whenever it moves."""
+        self._listeners = (*self._listeners, listener)
+
+    def _notify(self, snapshot: dict[str, Any]) -> None:
+        for listener in self._listeners:
+            try:
+                listener(snapshot)
+            except Exception:
+                log.exception("a mission listener failed")
 
     # --- the operator ------------------------------------------------------------------------
     def start_land(self, config: LandConfig) -> dict:
@@ -85,12 +107,13 @@ class MissionManager:
         return self._start(lambda now, cb: HoverMission(self.link, config, now=now, on_change=cb))
 
     def abort(self, reason: str = "operator abort") -> dict | None:
-        """Abort the running mission (acted on within one period); None when none runs."""
+        """Abort the running mission (acted on at once); None when none runs."""
         with self._lock:
             mission = self._mission
         if mission is None or mission.done:
             return None
         mission.abort(reason)
+        self._results.nudge()  # acted on now, not at the next result
         thread = self._thread
         if thread is not None and thread is not threading.current_thread():
             thread.join(JOIN_TIMEOUT_S)  # acted on, stored and reported
@@ -142,6 +165,7 @@ class MissionManager:
         """Abort a running mission (the station is going) and stop the thread."""
         self.abort("the ground station is shutting down")
         self._stop.set()
+        self._results.close()
         if self._thread is not None:
             self._thread.join(JOIN_TIMEOUT_S)
             self._thread = None
@@ -162,6 +186,7 @@ class MissionManager:
             mission = make(time.monotonic(), self._on_change)
             self._mission = mission
             self._stop.clear()
+            self._results.clear()  # only results from now on
             detail = {"strategy": mission.record.strategy, "config": mission.record.config}
             self._run_id = (
                 self.storage.start_mission_run(mission.kind, detail) if self.storage else None
@@ -202,25 +227,25 @@ class MissionManager:
         self._notify(self._snapshot(mission))
 
     def _loop(self, mission: Mission) -> None:
-        seen: object = None
         last_notify = 0.0
-        next_t = time.monotonic()
+        next_tick = time.monotonic()
         try:
             while not mission.done and not self._stop.is_set():
+                # Woken by the next result, or at the next tick without one.
+                processed = self._results.take(max(0.0, next_tick - time.monotonic()))
+                if self._stop.is_set():
+                    break
                 now = time.monotonic()
-                processed = self._latest()
                 sample = None
-                if processed is not None and processed is not seen:
-                    seen = processed
+                if processed is not None:
                     sample = VisionSample(
                         processed.result, processed.camera, processed.frame.t_capture
                     )
                 mission.step(now, sample)
+                next_tick = now + self.period_s
                 if now - last_notify >= SNAPSHOT_PERIOD_S:
                     last_notify = now
                     self._notify(self._snapshot(mission))
-                next_t += self.period_s
-                self._stop.wait(max(0.0, next_t - time.monotonic()))
             if not mission.done:
                 mission.abort("the ground station is shutting down")
                 mission.step(time.monotonic())

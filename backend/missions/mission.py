@@ -2,7 +2,7 @@
 
 A mission is driven by whoever owns the clock: the station's mission thread in real
 time (:mod:`backend.missions.manager`), or the scenario runner in lockstep with the
-simulated vehicle (:mod:`backend.scenarios`). Each ``step(now, sample)`` reads the
+simulated vehicle (:mod:`bench.scenarios`). Each ``step(now, sample)`` reads the
 link's telemetry, takes the newest vision result, and sends what the state calls for.
 The link is anything with :class:`~backend.link.VehicleLink`'s methods.
 """

@@ -34,8 +34,14 @@ import numpy as np
 import torch
 
 from pipeline.camera import Camera
-from pipeline.frame import MAX_SHAPE_RESIDUAL
-from pipeline.learn.data import CandidateSet, collect, frame_candidates, is_pad_h, iter_frames
+from pipeline.learn.data import (
+    MAX_SHAPE_RESIDUAL,
+    CandidateSet,
+    collect,
+    frame_candidates,
+    is_pad_h,
+    iter_frames,
+)
 from pipeline.learn.rbm import RBMClassifier, single_thread
 from pipeline.learn.verifier import DEFAULT_VIEWS, Verifier, fit_verifier, split
 from pipeline.reference import Reference

@@ -41,16 +41,9 @@ import cv2
 import numpy as np
 
 from pipeline.camera import Camera
-from pipeline.edges import refine_polygon
-from pipeline.frame import (
-    MAX_SHAPE_RESIDUAL,
-    MIN_H_AREA_PX,
-    corner_readings,
-    match_corners,
-    rank_candidates,
-)
+from pipeline.candidates import MIN_H_AREA_PX, MIN_H_SUPPORT, locate_all
 from pipeline.learn.encoding import Encoder, kabsch_rotation, normalise
-from pipeline.preprocess import DEFAULT_METHOD, binarize, subsample
+from pipeline.preprocess import DEFAULT_METHOD, binarize_channel, subsample, to_channel
 from pipeline.reference import Reference
 from pipeline.render import (
     LOOKALIKE_KINDS,
@@ -64,7 +57,8 @@ from pipeline.render.raster import project_points
 from pipeline.render.scene import _make_decal
 from pipeline.shapes import regions
 
-TRAIN_GATE = 0.3  # candidates up to this residual are learned from (the pipeline's gate: 0.1)
+MAX_SHAPE_RESIDUAL = 1.0 - MIN_H_SUPPORT  # the pipeline's gate: located H's it checks
+TRAIN_GATE = MAX_SHAPE_RESIDUAL  # candidates up to this residual are learned from
 FRAME_KINDS = ("pad", "lookalike", "stretched", "proportions")
 NEGATIVE_KINDS = FRAME_KINDS[1:]
 SCENE_EVERY = 10  # views per floor/look-alike layout (a scene takes ~0.2 s to build)
@@ -131,36 +125,28 @@ def frame_candidates(
     max_residual: float = TRAIN_GATE,
     method: str = DEFAULT_METHOD,
 ) -> list[Candidate]:
-    """The candidates process_frame would check in ``image``, residual up to ``max_residual``.
+    """The located H's process_frame would check in ``image`` (``pipeline.candidates``).
 
-    The same steps as ``pipeline.process_frame`` up to its corner check
-    (subsample, threshold, regions, solidity/Hu ranking, the readings of the 12
-    corners in turn, ordering and homography residual);
-    coordinates are in the (subsampled) working image.
+    The same steps as ``pipeline.process_frame`` up to its checks (subsample,
+    the reference's channel, threshold, regions, shape match, the H's sides
+    fitted on the edges); ``residual`` is the share of the H's sides not found
+    (``1 - support``), kept up to ``max_residual``. Coordinates are in the
+    (subsampled) working image; the corners the verifier sees are the fitted
+    ones, as in process_frame.
     """
     work, _ = subsample(image)
-    binary = binarize(work, method)
+    binary = binarize_channel(to_channel(work, reference.projection), method)
     area = float(work.shape[0] * work.shape[1])
     found = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=0.5 * area)
     out = []
-    for region, hu in rank_candidates(found, reference):
-        # As process_frame: the first reading of the corners that passes the gate is
-        # the one checked; when none does, the closest one (for training only).
-        best = None
-        for reading in corner_readings(region, binary):
-            ordered, residual = match_corners(reading, reference.corners_m, region.area)
-            if best is None or residual < best[1]:
-                best = (ordered, residual)
-            if residual <= MAX_SHAPE_RESIDUAL:
-                best = (ordered, residual)
-                break
-        if best is not None and best[1] <= max_residual:
-            # The corners the verifier sees are refined on the gray edges, as in
-            # process_frame: they do not depend on the threshold.
-            refined = refine_polygon(binary.smooth, best[0])
-            corners = refined[0] if refined is not None else best[0]
+    for hit in locate_all(found, binary, reference):
+        residual = 1.0 - hit.fit.support
+        if residual <= max_residual:
+            region = hit.candidate.region
             contour = region.contour.astype(np.float64)
-            out.append(Candidate(corners, contour, float(best[1]), float(region.area), hu))
+            out.append(
+                Candidate(hit.corners, contour, residual, float(region.area), hit.candidate.hu)
+            )
     return out
 
 

@@ -10,8 +10,22 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-FLOOR_KINDS: tuple[str, ...] = ("asphalt", "concrete", "grass", "pavers", "plain")
-"""Ground types; ``"textured"`` in `make_scene` draws one of the first four."""
+FLOOR_KINDS: tuple[str, ...] = (
+    "asphalt",
+    "concrete",
+    "grass",
+    "pavers",
+    "plain",
+    "sand",
+    "carpet",
+    "wood",
+)
+"""Ground types. ``"textured"`` in `make_scene` draws one of `TEXTURED_KINDS` (the
+benchmark's mix since the start, so its figures stay comparable); ``"any"`` draws one
+of every kind but ``"plain"``."""
+
+TEXTURED_KINDS: tuple[str, ...] = ("asphalt", "concrete", "grass", "pavers")
+OUTDOOR_KINDS: tuple[str, ...] = tuple(k for k in FLOOR_KINDS if k != "plain")
 
 FLOOR_TILE_PX = 2048
 FLOOR_PX_PER_M = 200.0
@@ -51,6 +65,9 @@ def make_floor(kind: str, rng: np.random.Generator, tile_px: int = FLOOR_TILE_PX
         "grass": _grass,
         "pavers": _pavers,
         "plain": _plain,
+        "sand": _sand,
+        "carpet": _carpet,
+        "wood": _wood,
     }[kind]
     bgr = maker(rng, n)
     return np.clip(np.rint(bgr), 0, 255).astype(np.uint8)
@@ -185,3 +202,47 @@ def _pavers(rng: np.random.Generator, n: int) -> np.ndarray:
 def _plain(rng: np.random.Generator, n: int) -> np.ndarray:
     gray = rng.uniform(110, 140) + _octaves(rng, n, [(8, 1.5), (n, 1.0)])
     return _tint(gray, (1.0, 1.0, 1.0))
+
+
+def _sand(rng: np.random.Generator, n: int) -> np.ndarray:
+    base = rng.uniform(140, 158)
+    gray = base + _octaves(rng, n, [(4, 6), (16, 5), (64, 3), (n // 2, 4), (n, 6)])
+    # Wind ripples: a few centimetres apart, wavy, along one of the tile's axes.
+    ys = np.arange(n, dtype=np.float32)[:, None]
+    waves = int(rng.choice([128, 256]))
+    wobble = 3.0 * periodic_noise(rng, n, 8)
+    gray += rng.uniform(3, 7) * np.sin(2 * np.pi * (waves * ys / n) + wobble)
+    pebbles = rng.random((n, n)) < 0.004
+    gray[pebbles] -= rng.uniform(25, 45)
+    gray = _wrap_blur(gray, np.full((2, 2), 0.25, np.float32))
+    return _tint(gray, (0.82, 1.0, 1.12))
+
+
+def _carpet(rng: np.random.Generator, n: int) -> np.ndarray:
+    # Loop pile: fine fibre noise over a faint woven grid, in a dyed colour.
+    base = rng.uniform(95, 125)
+    fibres = rng.standard_normal((n, n)).astype(np.float32)
+    fibres = _wrap_blur(fibres, np.full((2, 2), 0.25, np.float32)) * 10
+    ys, xs = np.mgrid[0:n, 0:n].astype(np.float32)
+    weave = 4 * np.sin(2 * np.pi * xs / 4) * np.sin(2 * np.pi * ys / 4)
+    gray = base + fibres + weave + _octaves(rng, n, [(4, 5), (32, 3)])
+    dyes = [(1.25, 0.9, 0.8), (0.8, 0.85, 1.3), (0.95, 1.0, 1.05), (0.85, 1.1, 0.9)]
+    return _tint(gray, dyes[int(rng.integers(len(dyes)))])
+
+
+def _wood(rng: np.random.Generator, n: int) -> np.ndarray:
+    # Deck boards: planks along x, each with its own shade and grain, dark joints.
+    planks = int(rng.choice([16, 32]))  # 0.64 m or 0.32 m wide boards at 5 mm texels
+    size = n // planks
+    base = rng.uniform(105, 135)
+    shade = rng.normal(0, 9, planks).astype(np.float32)
+    rows = np.repeat(shade, size)[:, None]
+    ys = np.arange(n, dtype=np.float32)[:, None]
+    wobble = 4.0 * periodic_noise(rng, n, 16)
+    grain = 5 * np.sin(2 * np.pi * (ys / 8.0) + wobble) + 3 * periodic_noise(rng, n, n // 4)
+    gray = base + rows + grain + _octaves(rng, n, [(8, 4), (n // 2, 3)])
+    joint = max(2, size // 40)
+    for k in range(0, n, size):
+        gray[k : k + joint, :] = base - 45
+    gray = np.roll(gray, size // 2, axis=0)
+    return _tint(gray, (0.72, 0.95, 1.25))

@@ -16,7 +16,16 @@ import cv2
 import numpy as np
 
 from pipeline.camera import Camera
-from pipeline.render.degrade import Lighting, check_degradations, degrade
+from pipeline.render.degrade import (
+    Exposure,
+    Glare,
+    Lighting,
+    MotionBlur,
+    Shadow,
+    check_degradations,
+    check_extras,
+    degrade,
+)
 from pipeline.render.scene import Decal, Scene
 
 SKY_BGR = (215, 200, 185)
@@ -103,6 +112,11 @@ def render(
     light: Lighting | None = None,
     rng: np.random.Generator | None = None,
     supersample: int = 2,
+    shadow: Shadow | None = None,
+    glare: Glare | None = None,
+    motion_blur: MotionBlur | None = None,
+    exposure: Exposure | None = None,
+    jpeg_quality: int | None = None,
 ) -> np.ndarray:
     """The camera's picture of the scene, with optional degradations.
 
@@ -119,6 +133,8 @@ def render(
     light : illumination gain, gradient and vignetting (None: none).
     rng : numpy Generator for the noise.
     supersample : resolution factor for the pictures on the floor (1..4).
+    shadow : a soft shadow cast on the ground (a convex polygon on the pad plane).
+    glare, motion_blur, exposure, jpeg_quality : see `pipeline.render.degrade`.
 
     Returns
     -------
@@ -139,10 +155,52 @@ def render(
         raise ValueError(f"camera must be a pipeline.camera.Camera, got {type(camera).__name__}")
     pos, R = check_pose(position_m, R_pad_cam)
     check_degradations(snr_db, blur_sigma_px, light, rng)
+    check_extras(motion_blur, glare, exposure, jpeg_quality)
+    if shadow is not None and not isinstance(shadow, Shadow):
+        raise ValueError(f"shadow must be a Shadow or None, got {shadow!r}")
     if isinstance(supersample, bool) or supersample not in (1, 2, 3, 4):
         raise ValueError(f"supersample must be 1, 2, 3 or 4, got {supersample!r}")
     clean = render_clean(scene, camera, pos, R, supersample=supersample)
-    return degrade(clean, light=light, blur_sigma_px=blur_sigma_px, snr_db=snr_db, rng=rng)
+    shade = None if shadow is None else shadow_map(shadow, camera, pos, R)
+    return degrade(
+        clean,
+        light=light,
+        blur_sigma_px=blur_sigma_px,
+        snr_db=snr_db,
+        rng=rng,
+        shade=shade,
+        glare=glare,
+        motion_blur=motion_blur,
+        exposure=exposure,
+        jpeg_quality=jpeg_quality,
+    )
+
+
+def shadow_map(shadow: Shadow, camera: Camera, pos: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """Per-pixel light factor (float32) of a shadow on the ground: 1 - darkness inside.
+
+    Every pixel's ray is traced to the plane and tested against the (convex) polygon's
+    edges, so the shadow lies on the ground under any perspective and distortion; the
+    penumbra is a Gaussian of ``softness_px`` in the image.
+    """
+    maps = _camera_maps(camera, 1)
+    G = np.linalg.inv(pixel_from_plane(camera.K, pos, R))
+    u = maps.undistorted
+    q = u[..., 0:1] * G[:, 0] + u[..., 1:2] * G[:, 1] + G[:, 2]  # H x W x 3
+    w = q[..., 2]
+    ground = w > 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x, y = q[..., 0] / w, q[..., 1] / w
+    pts = np.asarray(shadow.polygon_m, np.float64)
+    area2 = np.sum(pts[:, 0] * np.roll(pts[:, 1], -1) - np.roll(pts[:, 0], -1) * pts[:, 1])
+    inside = ground.copy()
+    for a, b in zip(pts, np.roll(pts, -1, axis=0), strict=True):
+        cross = (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0])
+        inside &= (cross >= 0) if area2 > 0 else (cross <= 0)
+    mask = inside.astype(np.float32)
+    if shadow.softness_px > 0:
+        mask = cv2.GaussianBlur(mask, (0, 0), float(shadow.softness_px))
+    return (1.0 - np.float32(shadow.darkness) * mask).astype(np.float32)
 
 
 def render_clean(

@@ -14,7 +14,14 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from pipeline.render.floor import FLOOR_KINDS, FLOOR_PX_PER_M, FLOOR_TILE_PX, make_floor
+from pipeline.render.floor import (
+    FLOOR_KINDS,
+    FLOOR_PX_PER_M,
+    FLOOR_TILE_PX,
+    OUTDOOR_KINDS,
+    TEXTURED_KINDS,
+    make_floor,
+)
 from pipeline.render.pad import H_HEIGHT, LOOKALIKE_KINDS, PAINT_BGR, make_lookalike
 
 _DECAL_BORDER = 4  # transparent texels kept around every pyramid level
@@ -99,6 +106,9 @@ def make_scene(
     lookalikes: int = 0,
     lookalike_kinds: Sequence[str] = LOOKALIKE_KINDS,
     pad_visible: bool = True,
+    alpha: np.ndarray | None = None,
+    lookalike_bgr: tuple[float, float, float] = PAINT_BGR,
+    h_size_m: float | None = None,
 ) -> Scene:
     """Lay ``texture_bgr`` flat at the origin on a procedural floor, with look-alikes.
 
@@ -108,10 +118,16 @@ def make_scene(
         grey uint8, seen from above with its top edge toward pad +y.
     size_m : the picture's width in metres; its height follows its aspect ratio.
     rng : numpy Generator (or an int seed) for the floor and the look-alikes.
-    floor : "textured" (a random ground type), "plain", or a kind in `FLOOR_KINDS`.
+    floor : "textured" (one of `TEXTURED_KINDS`), "any" (any kind but plain), a kind in
+        `FLOOR_KINDS`, or a sequence of kinds to draw one from.
     lookalikes : how many white look-alike shapes to paint beside the picture (0..8).
     lookalike_kinds : the kinds to draw from (subset of `LOOKALIKE_KINDS`).
     pad_visible : False leaves the picture out (floor and look-alikes stay).
+    alpha : optional uint8 coverage of the picture (same height and width; 0 lets the
+        floor show through, e.g. around a round pad or a painted H).
+    lookalike_bgr : the look-alikes' paint (a design's H colour makes harder negatives).
+    h_size_m : the H's extent, which the look-alikes' size follows (default: the seed
+        pad's, ``H_HEIGHT * size_m``).
 
     Examples
     --------
@@ -128,12 +144,15 @@ def make_scene(
     if not math.isfinite(size_m) or size_m <= 0:
         raise ValueError(f"size_m must be positive and finite, got {size_m}")
     rng = _as_rng(rng)
-    if floor == "textured":
-        floor_kind = str(rng.choice(FLOOR_KINDS[:-1]))
-    elif floor in FLOOR_KINDS:
-        floor_kind = floor
+    if isinstance(floor, str):
+        choices = {"textured": TEXTURED_KINDS, "any": OUTDOOR_KINDS}.get(floor, (floor,))
     else:
-        raise ValueError(f"floor must be 'textured' or one of {FLOOR_KINDS}, got {floor!r}")
+        choices = tuple(floor)
+    if not choices or any(k not in FLOOR_KINDS for k in choices):
+        raise ValueError(
+            f"floor must be 'textured', 'any', or kinds from {FLOOR_KINDS}, got {floor!r}"
+        )
+    floor_kind = str(rng.choice(choices)) if len(choices) > 1 else choices[0]
     if isinstance(lookalikes, bool) or not isinstance(lookalikes, int | np.integer):
         raise ValueError(f"lookalikes must be an integer, got {lookalikes!r}")
     if not 0 <= lookalikes <= 8:
@@ -142,10 +161,24 @@ def make_scene(
     if lookalikes and (not kinds or any(k not in LOOKALIKE_KINDS for k in kinds)):
         raise ValueError(f"lookalike_kinds must be a non-empty subset of {LOOKALIKE_KINDS}")
 
+    if alpha is not None:
+        alpha = np.asarray(alpha)
+        if alpha.shape != texture.shape[:2] or alpha.dtype != np.uint8:
+            raise ValueError(
+                f"alpha must be uint8 of the picture's size {texture.shape[:2]}, "
+                f"got {alpha.dtype} {alpha.shape}"
+            )
+    paint = np.asarray(lookalike_bgr, np.float32).ravel()
+    if paint.size != 3 or not np.all(np.isfinite(paint)) or paint.min() < 0 or paint.max() > 255:
+        raise ValueError(f"lookalike_bgr must be three values in 0..255, got {lookalike_bgr!r}")
+
     tile = make_floor(floor_kind, rng, FLOOR_TILE_PX)
     height_m = size_m * texture.shape[0] / texture.shape[1]
-    pad = _make_decal("pad", texture, None, (0.0, 0.0), 0.0, size_m)
-    shapes = _place_lookalikes(rng, lookalikes, kinds, size_m, height_m)
+    pad = _make_decal("pad", texture, alpha, (0.0, 0.0), 0.0, size_m)
+    h_size = H_HEIGHT * size_m if h_size_m is None else float(h_size_m)
+    if not math.isfinite(h_size) or h_size <= 0:
+        raise ValueError(f"h_size_m must be positive and finite, got {h_size_m!r}")
+    shapes = _place_lookalikes(rng, lookalikes, kinds, size_m, height_m, paint, h_size)
     return Scene(
         floor_kind=floor_kind,
         floor_levels=_floor_pyramid(tile),
@@ -259,16 +292,18 @@ def _place_lookalikes(
     kinds: tuple[str, ...],
     pad_w: float,
     pad_h: float,
+    paint_bgr: np.ndarray,
+    h_size: float,
 ) -> tuple[Decal, ...]:
-    """White shapes sized like the H, beside the pad (never on it, nor on each other)."""
+    """Shapes in the H's paint sized like the H, beside the pad (never on it nor on each other)."""
     placed: list[Decal] = []
     margin = 0.05 * max(pad_w, pad_h)
     reach = 3.0 * max(pad_w, pad_h)
     for _ in range(count):
         kind = str(kinds[int(rng.integers(len(kinds)))])
         mask = make_lookalike(kind, _LOOKALIKE_PX, rng)
-        # The masks fill ~0.9 of their square, the pad's H is H_HEIGHT of the board.
-        side = H_HEIGHT * pad_w / 0.9 * rng.uniform(0.75, 1.4)
+        # The masks fill ~0.9 of their square.
+        side = h_size / 0.9 * rng.uniform(0.75, 1.4)
         radius = side / math.sqrt(2)
         for _attempt in range(500):
             ang = rng.uniform(0, 2 * math.pi)
@@ -284,7 +319,7 @@ def _place_lookalikes(
             break
         else:  # pragma: no cover - the search area is far larger than the shapes
             raise RuntimeError("could not place the look-alikes without overlaps")
-        paint = np.array(PAINT_BGR, np.float32) * rng.uniform(0.85, 1.02)
+        paint = paint_bgr * rng.uniform(0.85, 1.02)
         bgr = np.broadcast_to(np.clip(paint, 0, 255).astype(np.uint8), (*mask.shape, 3))
         placed.append(_make_decal(kind, bgr, mask, c, rng.uniform(0, 360), side))
     return tuple(placed)

@@ -2,13 +2,21 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from pipeline.camera import Camera
-from pipeline.render.degrade import Lighting, random_lighting
+from pipeline.render.degrade import (
+    Exposure,
+    Glare,
+    Lighting,
+    MotionBlur,
+    Shadow,
+    random_lighting,
+)
 from pipeline.render.pad import PAD_SIZE_M
 from pipeline.render.raster import project_points, render
 from pipeline.render.scene import Scene
@@ -61,7 +69,8 @@ class View:
 
     ``position_m``/``R_pad_cam``: the pose (pad frame, see `render`). ``yaw_deg``,
     ``tilt_deg``, ``tilt_dir_deg``: how ``R_pad_cam`` was made (`camera_rotation`).
-    ``snr_db`` None means no noise.
+    ``snr_db`` None means no noise. The real world's degradations (``motion_blur``,
+    ``shadow``, ``glare``, ``exposure``, ``jpeg_quality``) are None when absent.
     """
 
     position_m: np.ndarray
@@ -72,6 +81,11 @@ class View:
     snr_db: float | None
     blur_sigma_px: float
     light: Lighting | None
+    motion_blur: MotionBlur | None = None
+    shadow: Shadow | None = None
+    glare: Glare | None = None
+    exposure: Exposure | None = None
+    jpeg_quality: int | None = None
 
     @property
     def altitude_m(self) -> float:
@@ -87,7 +101,21 @@ class View:
             "snr_db": self.snr_db,
             "blur_sigma_px": self.blur_sigma_px,
             "light": None if self.light is None else vars(self.light).copy(),
+            "motion_blur": _as_dict(self.motion_blur),
+            "shadow": _as_dict(self.shadow),
+            "glare": _as_dict(self.glare),
+            "exposure": _as_dict(self.exposure),
+            "jpeg_quality": self.jpeg_quality,
         }
+
+
+def _as_dict(value: object) -> dict | None:
+    if value is None:
+        return None
+    out = {}
+    for k, v in vars(value).items():
+        out[k] = [list(p) for p in v] if k == "polygon_m" else (list(v) if k == "center_px" else v)
+    return out
 
 
 def _range(value: tuple[float, float] | float, name: str, lo: float) -> tuple[float, float]:
@@ -114,14 +142,19 @@ def random_view(
     pad_size_m: float = PAD_SIZE_M,
     margin_px: float = 8.0,
     lighting: bool = True,
+    realistic: bool = False,
+    min_tilt_deg: float = 0.0,
 ) -> View:
     """A random pose and degradations, as the accuracy benchmark samples them.
 
-    Altitude uniform in ``altitude`` (metres), tilt uniform in [0, max_tilt_deg] toward
+    Altitude uniform in ``altitude`` (metres), tilt uniform in [min_tilt_deg,
+    max_tilt_deg] (a fixed tilt when they are equal) toward
     a uniform direction, yaw uniform, the pad's centre at a uniform image position
     such that (with ``whole_pad_in_view``) all four board corners are at least
     ``margin_px`` inside the image; SNR uniform in ``snr_db`` (None: no noise), blur
-    sigma uniform in [0, max_blur_px], random lighting (``lighting``).
+    sigma uniform in [0, max_blur_px], random lighting (``lighting``). ``realistic``
+    adds the real world's degradations (`random_extras`), drawn after all the others
+    so that the rest of the view is the same as without them.
 
     Examples
     --------
@@ -139,6 +172,9 @@ def random_view(
     max_tilt = _finite(max_tilt_deg, "max_tilt_deg")
     if not 0 <= max_tilt < 60:
         raise ValueError(f"max_tilt_deg must be in [0, 60), got {max_tilt}")
+    min_tilt = _finite(min_tilt_deg, "min_tilt_deg")
+    if not 0 <= min_tilt <= max_tilt:
+        raise ValueError(f"min_tilt_deg must be in [0, max_tilt_deg], got {min_tilt}")
     snr = None if snr_db is None else _range(snr_db, "snr_db", -math.inf)
     blur = _finite(max_blur_px, "max_blur_px")
     if blur < 0:
@@ -155,7 +191,7 @@ def random_view(
     for _attempt in range(200):
         alt = float(rng.uniform(alt_lo, alt_hi))
         yaw = float(rng.uniform(-180.0, 180.0))
-        tilt = float(rng.uniform(0.0, max_tilt))
+        tilt = float(rng.uniform(min_tilt, max_tilt))
         tdir = float(rng.uniform(0.0, 360.0))
         R = camera_rotation(yaw, tilt_deg=tilt, tilt_dir_deg=tdir)
         if whole_pad_in_view:
@@ -180,7 +216,7 @@ def random_view(
             inside = (px >= margin).all() and (px[:, 0] <= W - 1 - margin).all()
             if not (inside and (px[:, 1] <= H - 1 - margin).all()):
                 continue
-        return View(
+        view = View(
             position_m=pos,
             R_pad_cam=R,
             yaw_deg=yaw,
@@ -190,9 +226,80 @@ def random_view(
             blur_sigma_px=float(rng.uniform(0.0, blur)),
             light=random_lighting(rng) if lighting else None,
         )
+        if realistic:
+            view = dataclasses.replace(view, **random_extras(rng, camera, pos, R, size))
+        return view
     raise ValueError(
         f"altitude: no pose in {altitude!r} m keeps a {size} m pad inside the "
         f"{W}x{H} image with a {margin} px margin"
+    )
+
+
+def random_extras(
+    rng: np.random.Generator,
+    camera: Camera,
+    position_m: np.ndarray,
+    R_pad_cam: np.ndarray,
+    pad_size_m: float,
+) -> dict:
+    """The real world's degradations for one view, each present with some chance.
+
+    Motion blur (60 %: 0.5-5 px, any direction), a soft shadow across the pad (40 %:
+    a pole's or branch's band, or a building's edge, taking 30-70 % of the light),
+    sun glare on or beside the pad (30 %: saturating), an exposure error (60 %: gain
+    0.6-1.7, gamma 0.7-1.4) and JPEG compression (80 %: quality 30-95). Returns
+    `View` fields.
+    """
+    out: dict = {}
+    if rng.random() < 0.6:
+        out["motion_blur"] = MotionBlur(float(rng.uniform(0.5, 5.0)), float(rng.uniform(0, 180)))
+    if rng.random() < 0.4:
+        out["shadow"] = _random_shadow(rng, pad_size_m)
+    if rng.random() < 0.3:
+        centre = project_points(camera, position_m, R_pad_cam, np.zeros((1, 2)))[0]
+        span = (
+            float(
+                np.linalg.norm(
+                    project_points(camera, position_m, R_pad_cam, np.array([(0.5, 0.0)])) - centre
+                )
+            )
+            * pad_size_m
+        )
+        offset = rng.uniform(-1.0, 1.0, 2) * span
+        out["glare"] = Glare(
+            (float(centre[0] + offset[0]), float(centre[1] + offset[1])),
+            float(max(2.0, span * rng.uniform(0.15, 0.6))),
+            float(rng.uniform(80.0, 400.0)),
+        )
+    if rng.random() < 0.6:
+        out["exposure"] = Exposure(float(rng.uniform(0.6, 1.7)), float(rng.uniform(0.7, 1.4)))
+    if rng.random() < 0.8:
+        out["jpeg_quality"] = int(rng.integers(30, 96))
+    return out
+
+
+def _random_shadow(rng: np.random.Generator, size: float) -> Shadow:
+    """A band (a pole, a branch) or a half-plane (a wall's edge) across the pad."""
+    ang = rng.uniform(0, math.pi)
+    d = np.array([math.cos(ang), math.sin(ang)])
+    n = np.array([-d[1], d[0]])
+    through = rng.uniform(-0.3, 0.3, 2) * size
+    if rng.random() < 0.6:
+        half_w = rng.uniform(0.04, 0.25) * size
+        near, far = -half_w, half_w
+    else:
+        near, far = 0.0, 20.0 * size  # everything on one side of an edge
+    length = 20.0 * size
+    pts = [
+        through + n * near - d * length,
+        through + n * near + d * length,
+        through + n * far + d * length,
+        through + n * far - d * length,
+    ]
+    return Shadow(
+        tuple((float(p[0]), float(p[1])) for p in pts),
+        darkness=float(rng.uniform(0.3, 0.7)),
+        softness_px=float(rng.uniform(0.5, 4.0)),
     )
 
 
@@ -222,4 +329,9 @@ def render_view(
         blur_sigma_px=view.blur_sigma_px,
         light=view.light,
         rng=rng,
+        shadow=view.shadow,
+        glare=view.glare,
+        motion_blur=view.motion_blur,
+        exposure=view.exposure,
+        jpeg_quality=view.jpeg_quality,
     )

@@ -9,8 +9,10 @@ import cv2
 import numpy as np
 import pytest
 
+from backend.imaging import UnsupportedImage, decode_image, sniff_image
+from backend.services.references import NoUsableH
 from backend.settings import Settings
-from backend.station import NoUsableH, Station, UnsupportedImage, decode_image, sniff_image
+from backend.station import Station, build_station
 from pipeline.render import make_pad_image
 
 
@@ -37,12 +39,12 @@ def wait_for(predicate, timeout):
 
 def test_start_run_stop_leaves_no_threads(tmp_path):
     before = {t.ident for t in threading.enumerate()}
-    station = Station(settings(tmp_path))
+    station = build_station(settings(tmp_path))
     station.start()
     try:
         wait_for(lambda: station.link.telemetry.state == "up", 15)
         wait_for(lambda: station.worker.stats.processed >= 2, 20)
-        status = station.status()
+        status = station.status.build_status()
         assert status["link"]["state"] == "up" and status["camera"]["state"] == "streaming"
         assert status["reference"]["name"] == "default pad"
         assert (tmp_path / "visland.db").is_file()
@@ -60,16 +62,16 @@ def test_an_unreachable_vehicle_shows_and_commands_fail_at_once(tmp_path):
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]  # closed again: nothing listens there
-    station = Station(settings(tmp_path, mavlink=f"tcp:127.0.0.1:{port}"))
+    station = build_station(settings(tmp_path, mavlink=f"tcp:127.0.0.1:{port}"))
     station.start()
     try:
-        assert station.vehicle_server is None
-        assert station.status()["link"]["state"] in ("connecting", "lost")
+        assert station.stand_in is None
+        assert station.status.build_status()["link"]["state"] in ("connecting", "lost")
         t0 = time.monotonic()
-        result = station.command("arm")
+        result = station.vehicle.command("arm")
         assert not result.ok and result.result_name == "LINK_DOWN"
         assert time.monotonic() - t0 < 1.0
-        assert station.status()["camera"]["frames"] == 0  # no pose, no simulated picture
+        assert station.status.build_status()["camera"]["frames"] == 0  # no pose, no picture
     finally:
         station.stop()
 
@@ -77,10 +79,11 @@ def test_an_unreachable_vehicle_shows_and_commands_fail_at_once(tmp_path):
 def test_a_reference_given_at_start_is_used(tmp_path):
     path = tmp_path / "my pad.png"
     cv2.imwrite(str(path), make_pad_image(500))
-    station = Station(settings(tmp_path / "data", reference=path, pad_size=0.9))
+    station = build_station(settings(tmp_path / "data", reference=path, pad_size=0.9))
     station.start()
     try:
-        summary = station.reference_summary()
+        summary = station.references.active_summary()
+        assert summary is not None
         assert summary["name"] == "my pad.png" and summary["pad_size_m"] == 0.9
     finally:
         station.stop()
@@ -89,14 +92,16 @@ def test_a_reference_given_at_start_is_used(tmp_path):
 def test_a_reference_without_h_at_start_is_a_clear_error(tmp_path):
     path = tmp_path / "blank.png"
     cv2.imwrite(str(path), np.zeros((200, 200, 3), np.uint8))
-    station = Station(settings(tmp_path / "data", reference=path))
+    before = {t.ident for t in threading.enumerate()}
     with pytest.raises(NoUsableH, match=r"white shape|H"):
-        station.start()
-    assert station.link is None and station.storage is None  # all taken down again
+        build_station(settings(tmp_path / "data", reference=path))
+    # Refused while building: no stand-in was started, nothing runs.
+    left = [t for t in threading.enumerate() if t.ident not in before and t.is_alive()]
+    assert not left, [t.name for t in left]
 
 
 def test_token_file_is_made_when_no_token_is_given(tmp_path):
-    station = Station(settings(tmp_path, token=None, mavlink="tcp:127.0.0.1:9"))
+    station = build_station(settings(tmp_path, token=None, mavlink="tcp:127.0.0.1:9"))
     station.start()
     try:
         assert (tmp_path / "token").read_text().strip() == station.token
@@ -141,7 +146,7 @@ def test_an_opencv_video_file_feeds_the_pipeline(tmp_path):
     for i in range(30):
         writer.write(render(scene, cam, np.array([0.01 * i, 0.0, 2.5]), camera_rotation(10.0)))
     writer.release()
-    station = Station(
+    station: Station = build_station(
         settings(tmp_path / "data", camera=f"opencv:{path}", mavlink="tcp:127.0.0.1:9")
     )
     station.start()
@@ -150,6 +155,6 @@ def test_an_opencv_video_file_feeds_the_pipeline(tmp_path):
         latest = station.worker.latest
         assert latest.result.detected and latest.result.pose is not None
         assert abs(latest.result.pose.altitude_m - 2.5) < 0.1
-        assert station.status()["camera"]["name"]
+        assert station.status.build_status()["camera"]["name"]
     finally:
         station.stop()

@@ -12,10 +12,15 @@ from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from backend.camera import Frame
+from backend.encoder import EncodedFrame, FrameEncoder
+from backend.framebus import FrameBus
 from backend.recorder import Recorder, copy_tlog_window
 from backend.storage import Storage
 from backend.vision_worker import Processed
-from pipeline import Camera, FrameResult
+from pipeline import Camera, FrameResult, Reference
+from pipeline.render import make_pad_image
+
+REFERENCE = Reference.from_image(make_pad_image(300), 0.55)
 
 
 def heartbeat_bytes(seq: int, sysid: int = 1) -> bytes:
@@ -78,8 +83,15 @@ def processed(seq: int) -> Processed:
     )
     t = time.monotonic() - 0.02
     return Processed(
-        Frame(image, t, seq, "test"), result, None, Camera.from_fov(64, 48, 60), 20.0, t + 0.02
+        Frame(image, t, seq, "test"), result, REFERENCE, Camera.from_fov(64, 48, 60), 20.0, t + 0.02
     )
+
+
+def encoded(seq: int) -> EncodedFrame:
+    """A processed frame as the encoder makes it for the viewers and the recorder."""
+    return FrameEncoder(
+        FrameBus("in").subscribe("x"), FrameBus("out"), jpeg_quality=lambda: 80
+    ).encode(processed(seq))
 
 
 @pytest.fixture
@@ -93,16 +105,23 @@ def test_a_flight_records_frames_results_and_its_tlog(tmp_path, store):
     tlogs = tmp_path / "tlogs"
     tlogs.mkdir()
     events = []
+    bus: FrameBus[EncodedFrame] = FrameBus("encoded")
     rec = Recorder(
-        tmp_path / "flights", store, tlog_dir=tlogs, on_event=lambda k, t, d: events.append((k, t))
+        tmp_path / "flights",
+        store,
+        bus,
+        tlog_dir=tlogs,
+        on_event=lambda k, t, d: events.append((k, t)),
     )
     try:
-        rec.submit(processed(0))  # not recording: ignored
+        assert not bus.wanted()  # not recording: the encoder may skip its work
+        assert rec.record(encoded(0)) is False  # not recording: ignored
         before = time.time()
         flight = rec.start("armed")
+        assert bus.wanted()
         assert rec.start("again") == flight  # one flight at a time
         for seq in (5, 6, 9):
-            rec.submit(processed(seq))
+            assert rec.record(encoded(seq))
         time.sleep(0.01)
         now = time.time()
         started = store.get_flight(flight["id"])["started"]
@@ -131,10 +150,11 @@ def test_a_flight_records_frames_results_and_its_tlog(tmp_path, store):
 
 
 def test_frames_can_be_left_out(tmp_path, store):
-    rec = Recorder(tmp_path / "flights", store, tlog_dir=None, record_frames=lambda: False)
+    bus: FrameBus[EncodedFrame] = FrameBus("encoded")
+    rec = Recorder(tmp_path / "flights", store, bus, tlog_dir=None, record_frames=lambda: False)
     try:
         rec.start("operator")
-        rec.submit(processed(1))
+        assert rec.record(encoded(1))
         info = rec.stop("operator")
     finally:
         rec.close()
@@ -146,8 +166,29 @@ def test_frames_can_be_left_out(tmp_path, store):
 
 
 def test_stop_without_flight_is_none(tmp_path, store):
-    rec = Recorder(tmp_path / "f", store, tlog_dir=None)
+    rec = Recorder(tmp_path / "f", store, FrameBus("encoded"), tlog_dir=None)
     try:
         assert rec.stop("operator") is None
     finally:
         rec.close()
+
+
+def test_the_writer_thread_records_what_the_bus_brings(tmp_path, store):
+    bus: FrameBus[EncodedFrame] = FrameBus("encoded")
+    rec = Recorder(tmp_path / "flights", store, bus, tlog_dir=None)
+    rec.start_writer()
+    try:
+        rec.start("operator")
+        bus.publish(encoded(3))
+        deadline = time.monotonic() + 5
+        while rec.written < 1 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        info = rec.stop("operator")
+    finally:
+        rec.close()
+    assert rec.written == 1 and rec.dropped == 0
+    line = json.loads(
+        (tmp_path / "flights" / info["dir"].rsplit("/", 1)[-1] / "results.jsonl").read_text()
+    )
+    assert line["seq"] == 3 and line["frame"] == "frames/000003.jpg"
+    assert line["result"] == json.loads(encoded(3).result_json)  # the viewers' JSON, as is

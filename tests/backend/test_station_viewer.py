@@ -10,18 +10,18 @@ import numpy as np
 import pytest
 import viser.transforms as tf
 
-from backend.camera.sim_source import (
-    SimCameraConfig,
-    VehiclePose,
-    camera_pose_in_pad_frame,
-)
-from backend.station import camera_yaw_in_pad
+from backend.frames import camera_yaw_in_pad
 from backend.viewer3d import (
     R_BODY_CAM,
     Viewer3D,
 )
 from pipeline.render import make_pad_image
 from pipeline.result import yaw_of
+from sim.camera import (
+    SimCameraConfig,
+    VehiclePose,
+    camera_pose_in_pad_frame,
+)
 
 
 def test_camera_mount_matches_the_simulated_camera():

@@ -135,7 +135,7 @@ def start_stand_in(log_dir: Path, ready_after: float) -> tuple[Proc, int]:
         [
             sys.executable,
             "-m",
-            "backend.sim.vehicle",
+            "sim.vehicle",
             "--mavlink",
             f"tcp:127.0.0.1:{port}",
             "--ready-after",

@@ -44,7 +44,7 @@ def test_analyze_reports_a_bad_reference_in_one_line(tmp_path):
         "-m", "pipeline", "analyze", str(blank), "--reference", str(blank), "--pad-size", "1"
     )
     assert done.returncode == 2
-    assert done.stderr.startswith("error: ") and "no white shape" in done.stderr
+    assert done.stderr.startswith("error: ") and "no shape stands out" in done.stderr
     missing = _py(
         "-m", "pipeline", "analyze", "nope.png", "--reference", str(blank), "--pad-size", "1"
     )

@@ -53,15 +53,3 @@ def test_returns_none_where_there_is_no_edge():
 def test_rejects_degenerate_input():
     with pytest.raises(ValueError, match="corners"):
         refine_polygon(np.zeros((10, 10), np.uint8), np.zeros((2, 2)))
-
-
-def test_surround_ratio_tells_a_board_from_a_floor():
-    from pipeline.edges import surround_ratio
-
-    on_board = cv2.GaussianBlur(_draw(QUAD, inside=230, outside=25), (5, 5), 1.0)
-    on_floor = cv2.GaussianBlur(_draw(QUAD, inside=230, outside=140), (5, 5), 1.0)
-    assert surround_ratio(on_board, QUAD, 2.5) < 0.15
-    assert surround_ratio(on_floor, QUAD, 2.5) > 0.55
-    assert surround_ratio(on_board, QUAD[::-1], 2.5) == pytest.approx(
-        surround_ratio(on_board, QUAD, 2.5)
-    )

@@ -28,9 +28,15 @@ def test_corner_order_follows_the_contour(pad):
 
 def test_side_bars_outline_and_symmetry(pad):
     ref = Reference.from_image(pad, 0.55)
-    assert len(ref.bars_m) == 2
-    assert ref.outline_m is not None
-    np.testing.assert_allclose(np.abs(ref.outline_m), 0.275, atol=1e-9)
+    bars = [m for m in ref.marks if m.bright]
+    assert len(bars) == 2 and all(len(b.corners_m) == 4 for b in bars)
+    truth = PadGeometry(size_m=0.55).side_bars_m
+    for bar in bars:
+        d = np.linalg.norm(bar.corners_m[:, None] - truth.reshape(-1, 2)[None], axis=2)
+        assert d.min(axis=1).max() < 0.002
+    outline = [m for m in ref.marks if not m.bright]
+    assert len(outline) == 1
+    np.testing.assert_allclose(np.abs(outline[0].corners_m), 0.275, atol=1e-9)
     assert ref.symmetric
 
 
@@ -74,8 +80,8 @@ def test_an_off_centre_h_is_not_symmetric():
 @pytest.mark.parametrize(
     ("picture", "message"),
     [
-        (np.zeros((400, 400, 3), np.uint8), "no white shape"),
-        (np.full((400, 400, 3), 255, np.uint8), "no white shape"),
+        (np.zeros((400, 400, 3), np.uint8), "no shape stands out"),
+        (np.full((400, 400, 3), 255, np.uint8), "no shape stands out"),
     ],
 )
 def test_pictures_without_an_h_are_refused(picture, message):
@@ -88,7 +94,7 @@ def test_lookalikes_are_not_taken_for_an_h(kind):
     mask = make_lookalike(kind, 300, np.random.default_rng(3))
     picture = np.zeros((500, 500, 3), np.uint8)
     picture[100:400, 100:400][mask > 0] = 255
-    with pytest.raises(ValueError, match=r"no usable H|no white shape"):
+    with pytest.raises(ValueError, match=r"no usable H|no shape stands out"):
         Reference.from_image(picture, 0.55)
 
 

@@ -19,8 +19,8 @@ from typing import Any
 import pytest
 
 from backend.link import VehicleLink
-from backend.sim.vehicle import SimConfig, SimVehicle, VehicleServer
 from sim.sitl import Sitl, SitlObserver, default_speedup, find_sitl_dir, wait_ready
+from sim.vehicle import SimConfig, SimVehicle, VehicleServer
 
 SITL_DIR = find_sitl_dir()
 requires_sitl = pytest.mark.skipif(

@@ -14,7 +14,7 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
-from backend.sim.vehicle import ParamStore
+from sim.vehicle import ParamStore
 from sim.vision_feed import VisionStandIn
 from tests.sitl.support import Flight, horizontal, requires_sitl, start_flight
 

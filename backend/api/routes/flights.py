@@ -3,19 +3,22 @@
 from __future__ import annotations
 
 import re
-from pathlib import Path
+from typing import Any
 
 from fastapi import APIRouter, HTTPException, status
 from fastapi.responses import FileResponse
 
-from backend.api.deps import FlightId, Operator, StationDep, Viewer
+from backend.api.deps import FlightId, FlightsDep, Operator, Viewer
+from backend.api.errors import OPERATOR_ERRORS, VIEWER_ERRORS, errors
+from backend.api.schemas import FlightFrame, FlightRef, FlightSummary
+from backend.services.flights import NoSuchFlight
 
 router = APIRouter(prefix="/flights", tags=["flights"])
 
 _FRAME_RE = re.compile(r"^\d{1,9}$")
 
 
-def _summary(row: dict) -> dict:
+def _summary(row: dict[str, Any]) -> dict[str, Any]:
     fid = row["id"]
     return {
         "id": fid,
@@ -29,53 +32,63 @@ def _summary(row: dict) -> dict:
     }
 
 
-def _flight_dir(station, flight_id: int) -> Path:
-    row = station.storage.get_flight(flight_id)
-    if row is None or not row["dir"]:
-        raise HTTPException(status.HTTP_404_NOT_FOUND, f"No flight {flight_id}.")
-    return Path(row["dir"])
+def _not_found(exc: NoSuchFlight) -> HTTPException:
+    return HTTPException(status.HTTP_404_NOT_FOUND, str(exc))
 
 
-@router.get("", dependencies=[Viewer])
-def list_flights(station: StationDep) -> list[dict]:
-    return [_summary(r) for r in station.storage.list_flights()]
+@router.get("", dependencies=[Viewer], response_model=list[FlightSummary], responses=VIEWER_ERRORS)
+def list_flights(flights: FlightsDep) -> list[dict[str, Any]]:
+    return [_summary(r) for r in flights.rows()]
 
 
-@router.post("/start", dependencies=[Operator])
-def start_flight(station: StationDep) -> dict:
+@router.post("/start", dependencies=[Operator], response_model=FlightRef, responses=OPERATOR_ERRORS)
+def start_flight(flights: FlightsDep) -> dict[str, Any]:
     """Start recording now (a flight also starts by itself when the vehicle arms)."""
-    return station.recorder.start("operator")
+    return flights.start("operator")
 
 
-@router.post("/stop", dependencies=[Operator])
-def stop_flight(station: StationDep) -> dict:
-    ended = station.recorder.stop("operator")
+@router.post(
+    "/stop",
+    dependencies=[Operator],
+    response_model=FlightRef,
+    responses={**OPERATOR_ERRORS, **errors(409)},
+)
+def stop_flight(flights: FlightsDep) -> dict[str, Any]:
+    ended = flights.stop("operator")
     if ended is None:
         raise HTTPException(status.HTTP_409_CONFLICT, "No flight is being recorded.")
     return ended
 
 
-@router.get("/{flight_id}", dependencies=[Viewer])
-def get_flight(flight_id: FlightId, station: StationDep) -> dict:
-    row = station.storage.get_flight(flight_id)
-    if row is None:
-        raise HTTPException(status.HTTP_404_NOT_FOUND, f"No flight {flight_id}.")
-    return _summary(row)
+@router.get(
+    "/{flight_id}",
+    dependencies=[Viewer],
+    response_model=FlightSummary,
+    responses={**VIEWER_ERRORS, **errors(404, 422)},
+)
+def get_flight(flight_id: FlightId, flights: FlightsDep) -> dict[str, Any]:
+    try:
+        return _summary(flights.get(flight_id))
+    except NoSuchFlight as exc:
+        raise _not_found(exc) from None
 
 
 @router.get(
     "/{flight_id}/tlog",
     dependencies=[Viewer],
     response_class=FileResponse,
-    responses={200: {"content": {"application/octet-stream": {}}}},
+    responses={
+        200: {"content": {"application/octet-stream": {}}, "description": "the .tlog"},
+        **VIEWER_ERRORS,
+        **errors(404, 422),
+    },
 )
-def flight_tlog(flight_id: FlightId, station: StationDep) -> FileResponse:
-    folder = _flight_dir(station, flight_id)
-    # A flight still in the air gets its log written up to now.
-    station.recorder.write_tlog_now(flight_id)
-    path = folder / "flight.tlog"
-    if not path.is_file():
-        raise HTTPException(status.HTTP_404_NOT_FOUND, f"Flight {flight_id} has no .tlog.")
+def flight_tlog(flight_id: FlightId, flights: FlightsDep) -> FileResponse:
+    """The flight's MAVLink log (a flight still in the air: written up to now)."""
+    try:
+        path = flights.tlog(flight_id)
+    except NoSuchFlight as exc:
+        raise _not_found(exc) from None
     return FileResponse(
         path, media_type="application/octet-stream", filename=f"flight-{flight_id}.tlog"
     )
@@ -85,40 +98,52 @@ def flight_tlog(flight_id: FlightId, station: StationDep) -> FileResponse:
     "/{flight_id}/results",
     dependencies=[Viewer],
     response_class=FileResponse,
-    responses={200: {"content": {"application/x-ndjson": {}}}},
+    responses={
+        200: {"content": {"application/x-ndjson": {}}, "description": "one result per line"},
+        **VIEWER_ERRORS,
+        **errors(404, 422),
+    },
 )
-def flight_results(flight_id: FlightId, station: StationDep) -> FileResponse:
-    path = _flight_dir(station, flight_id) / "results.jsonl"
-    if not path.is_file():
-        raise HTTPException(status.HTTP_404_NOT_FOUND, f"Flight {flight_id} has no results.")
+def flight_results(flight_id: FlightId, flights: FlightsDep) -> FileResponse:
+    try:
+        path = flights.results(flight_id)
+    except NoSuchFlight as exc:
+        raise _not_found(exc) from None
     return FileResponse(path, media_type="application/x-ndjson")
 
 
-@router.get("/{flight_id}/frames", dependencies=[Viewer])
-def flight_frames(flight_id: FlightId, station: StationDep) -> list[dict]:
-    folder = _flight_dir(station, flight_id) / "frames"
-    if not folder.is_dir():
-        return []
-    out = []
-    for path in sorted(folder.glob("*.jpg")):
-        n = int(path.stem)
-        out.append({"seq": n, "url": f"/api/flights/{flight_id}/frames/{n}.jpg"})
-    return out
+@router.get(
+    "/{flight_id}/frames",
+    dependencies=[Viewer],
+    response_model=list[FlightFrame],
+    responses={**VIEWER_ERRORS, **errors(404, 422)},
+)
+def flight_frames(flight_id: FlightId, flights: FlightsDep) -> list[dict[str, Any]]:
+    try:
+        seqs = flights.frames(flight_id)
+    except NoSuchFlight as exc:
+        raise _not_found(exc) from None
+    return [{"seq": n, "url": f"/api/flights/{flight_id}/frames/{n}.jpg"} for n in seqs]
 
 
 @router.get(
     "/{flight_id}/frames/{name}",
     dependencies=[Viewer],
     response_class=FileResponse,
-    responses={200: {"content": {"image/jpeg": {}}}},
+    responses={
+        200: {"content": {"image/jpeg": {}}, "description": "the frame"},
+        **VIEWER_ERRORS,
+        **errors(404, 422),
+    },
 )
-def flight_frame(flight_id: FlightId, name: str, station: StationDep) -> FileResponse:
+def flight_frame(flight_id: FlightId, name: str, flights: FlightsDep) -> FileResponse:
     stem = name.removesuffix(".jpg")
     if not name.endswith(".jpg") or not _FRAME_RE.match(stem):
         raise HTTPException(
             status.HTTP_422_UNPROCESSABLE_CONTENT, "A frame is named by its number: <n>.jpg."
         )
-    path = _flight_dir(station, flight_id) / "frames" / f"{int(stem):06d}.jpg"
-    if not path.is_file():
-        raise HTTPException(status.HTTP_404_NOT_FOUND, f"Flight {flight_id} has no frame {stem}.")
+    try:
+        path = flights.frame(flight_id, int(stem))
+    except NoSuchFlight as exc:
+        raise _not_found(exc) from None
     return FileResponse(path, media_type="image/jpeg")

@@ -8,19 +8,21 @@ Commands need the operator token and answer in the vehicle routes' shape (``ok``
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
-from fastapi import APIRouter, Body, HTTPException, Path, status
+from fastapi import APIRouter, Body, HTTPException, status
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-from backend.api.deps import Operator, StationDep, Viewer
-from backend.link import LinkState
+from backend.api.deps import MissionsDep, Operator, RunId, VehicleDep, Viewer
+from backend.api.errors import OPERATOR_ERRORS, VIEWER_ERRORS, errors
+from backend.api.schemas import MissionCommand, MissionRun, MissionRunSummary, MissionSnapshot
 from backend.missions import HoverConfig
 from backend.missions.manager import MissionBusy
+from backend.services.vehicle import VehicleService
 
 router = APIRouter(prefix="/missions", tags=["missions"])
 
-RunId = Annotated[int, Path(ge=1, le=2**63 - 1, description="a mission run's id")]
+_COMMAND_ERRORS = {**OPERATOR_ERRORS, **errors(409, 422)}
 
 
 class _Finite(BaseModel):
@@ -48,23 +50,15 @@ class LandRequest(_Finite):
     search_s: float = Field(8.0, gt=0, le=600)
 
 
-def _manager(station):
-    manager = station.missions
-    if manager is None:
-        raise HTTPException(status.HTTP_503_SERVICE_UNAVAILABLE, "The station is not running.")
-    return manager
-
-
-def _check_link(station) -> None:
-    tel = station.telemetry
-    if tel is None or tel.state != LinkState.UP:
+def _check_link(vehicle: VehicleService) -> None:
+    if not vehicle.link_up:
         raise HTTPException(
             status.HTTP_503_SERVICE_UNAVAILABLE,
             "The link to the vehicle is down; no mission was started.",
         )
 
 
-def _started(command: str, snapshot: dict) -> dict:
+def _started(command: str, snapshot: dict[str, Any]) -> dict[str, Any]:
     strategy = snapshot.get("strategy")
     return {
         "ok": True,
@@ -77,34 +71,51 @@ def _started(command: str, snapshot: dict) -> dict:
     }
 
 
-@router.post("/hover", dependencies=[Operator])
-def hover(station: StationDep, body: Annotated[HoverRequest | None, Body()] = None) -> dict:
+@router.post(
+    "/hover", dependencies=[Operator], response_model=MissionCommand, responses=_COMMAND_ERRORS
+)
+def hover(
+    missions: MissionsDep,
+    vehicle: VehicleDep,
+    body: Annotated[HoverRequest | None, Body()] = None,
+) -> dict[str, Any]:
+    """Take off (if need be), fly over the pad and hold there."""
     req = body or HoverRequest()
-    manager = _manager(station)
-    _check_link(station)
-    land = station.land_config(abort_mode=req.abort_mode)
+    _check_link(vehicle)
+    land = vehicle.land_config(abort_mode=req.abort_mode)
     config = HoverConfig(altitude_m=req.altitude_m, hold_s=req.hold_s, land=land)
     try:
-        return _started("mission hover", manager.start_hover(config))
+        return _started("mission hover", missions.start_hover(config))
     except MissionBusy as exc:
         raise HTTPException(status.HTTP_409_CONFLICT, str(exc)) from None
 
 
-@router.post("/land", dependencies=[Operator])
-def land(station: StationDep, body: Annotated[LandRequest | None, Body()] = None) -> dict:
+@router.post(
+    "/land", dependencies=[Operator], response_model=MissionCommand, responses=_COMMAND_ERRORS
+)
+def land(
+    missions: MissionsDep,
+    vehicle: VehicleDep,
+    body: Annotated[LandRequest | None, Body()] = None,
+) -> dict[str, Any]:
+    """Land on the pad by precision landing ("plnd") or GCS guidance ("guided")."""
     req = body or LandRequest()
-    manager = _manager(station)
-    _check_link(station)
-    config = station.land_config(**req.model_dump())
+    _check_link(vehicle)
+    config = vehicle.land_config(**req.model_dump())
     try:
-        return _started("mission land", manager.start_land(config))
+        return _started("mission land", missions.start_land(config))
     except MissionBusy as exc:
         raise HTTPException(status.HTTP_409_CONFLICT, str(exc)) from None
 
 
-@router.post("/abort", dependencies=[Operator])
-def abort(station: StationDep) -> dict:
-    snapshot = _manager(station).abort("operator abort")
+@router.post(
+    "/abort",
+    dependencies=[Operator],
+    response_model=MissionCommand,
+    responses={**OPERATOR_ERRORS, **errors(409)},
+)
+def abort(missions: MissionsDep) -> dict[str, Any]:
+    snapshot = missions.abort("operator abort")
     if snapshot is None:
         raise HTTPException(status.HTTP_409_CONFLICT, "No mission is running.")
     return {
@@ -118,22 +129,34 @@ def abort(station: StationDep) -> dict:
     }
 
 
-@router.get("/current", dependencies=[Viewer])
-def current(station: StationDep) -> dict | None:
+@router.get(
+    "/current",
+    dependencies=[Viewer],
+    response_model=MissionSnapshot | None,
+    responses=VIEWER_ERRORS,
+)
+def current(missions: MissionsDep) -> dict[str, Any] | None:
     """The running mission's live state (or the last one's, or null)."""
-    return _manager(station).current()
+    return missions.current()
 
 
-@router.get("", dependencies=[Viewer])
-def history(station: StationDep) -> list[dict]:
+@router.get(
+    "", dependencies=[Viewer], response_model=list[MissionRunSummary], responses=VIEWER_ERRORS
+)
+def history(missions: MissionsDep) -> list[dict[str, Any]]:
     """Stored runs, newest first, with their outcomes and touchdown errors."""
-    return _manager(station).history()
+    return missions.history()
 
 
-@router.get("/{run_id}", dependencies=[Viewer])
-def run(run_id: RunId, station: StationDep) -> dict:
+@router.get(
+    "/{run_id}",
+    dependencies=[Viewer],
+    response_model=MissionRun,
+    responses={**VIEWER_ERRORS, **errors(404, 422)},
+)
+def run(run_id: RunId, missions: MissionsDep) -> dict[str, Any]:
     """One stored run with its whole record (states, targets sent, touchdown)."""
-    row = _manager(station).run(run_id)
+    row = missions.run(run_id)
     if row is None:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"No mission run {run_id}.")
     return row

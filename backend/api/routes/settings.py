@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 from fastapi import APIRouter
 from pydantic import BaseModel, ConfigDict, Field, StrictBool
 
-from backend.api.deps import Operator, StationDep, Viewer
+from backend.api.deps import Operator, RuntimeDep, Viewer
+from backend.api.errors import OPERATOR_ERRORS, VIEWER_ERRORS, errors
+from backend.api.schemas import PublicSettings
 
 router = APIRouter(tags=["settings"])
 
@@ -20,12 +24,19 @@ class SettingsUpdate(BaseModel):
     jpeg_quality: int | None = Field(None, ge=10, le=100, strict=True)
 
 
-@router.get("/settings", dependencies=[Viewer])
-def get_settings(station: StationDep) -> dict:
-    return station.public_settings()
+@router.get(
+    "/settings", dependencies=[Viewer], response_model=PublicSettings, responses=VIEWER_ERRORS
+)
+async def get_settings(runtime: RuntimeDep) -> dict[str, Any]:
+    return runtime.public()
 
 
-@router.put("/settings", dependencies=[Operator])
-def put_settings(update: SettingsUpdate, station: StationDep) -> dict:
-    changes = update.model_dump(exclude_none=True)
-    return station.update_runtime(changes)
+@router.put(
+    "/settings",
+    dependencies=[Operator],
+    response_model=PublicSettings,
+    responses={**OPERATOR_ERRORS, **errors(422)},
+)
+def put_settings(update: SettingsUpdate, runtime: RuntimeDep) -> dict[str, Any]:
+    """Change settings (stored at once, so they hold after a restart)."""
+    return runtime.update(update.model_dump(exclude_none=True))

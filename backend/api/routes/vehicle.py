@@ -13,11 +13,21 @@ from fastapi import APIRouter
 from fastapi.responses import JSONResponse
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-from backend.api.deps import Operator, StationDep
+from backend.api.deps import Operator, VehicleDep
+from backend.api.errors import OPERATOR_ERRORS, command_errors, errors
+from backend.api.schemas import CommandResult
+from backend.link import CommandResult as LinkCommandResult
 from backend.link.commands import INVALID_ARGUMENT, LINK_DOWN, TIMEOUT
 from backend.link.modes import COPTER_MODES
 
-router = APIRouter(prefix="/vehicle", tags=["vehicle"], dependencies=[Operator])
+# Errors of a command carry the whole CommandResult (the vehicle's reasons verbatim);
+# 401 and a body that does not validate are plain ErrorResponses.
+router = APIRouter(
+    prefix="/vehicle",
+    tags=["vehicle"],
+    dependencies=[Operator],
+    responses={**OPERATOR_ERRORS, **command_errors(409, 503, 504), **errors(422)},
+)
 
 MAX_TAKEOFF_M = 100.0
 
@@ -50,7 +60,7 @@ class Mode(BaseModel):
         return name
 
 
-def _answer(result) -> JSONResponse:
+def _answer(result: LinkCommandResult) -> JSONResponse:
     body = result.to_dict()
     if result.ok:
         code = 200
@@ -68,36 +78,36 @@ def _answer(result) -> JSONResponse:
     return JSONResponse(body, status_code=code)
 
 
-@router.post("/arm")
-def arm(station: StationDep) -> JSONResponse:
-    return _answer(station.command("arm"))
+@router.post("/arm", response_model=CommandResult)
+def arm(vehicle: VehicleDep) -> JSONResponse:
+    return _answer(vehicle.command("arm"))
 
 
-@router.post("/disarm")
-def disarm(station: StationDep) -> JSONResponse:
-    return _answer(station.command("disarm"))
+@router.post("/disarm", response_model=CommandResult)
+def disarm(vehicle: VehicleDep) -> JSONResponse:
+    return _answer(vehicle.command("disarm"))
 
 
-@router.post("/force-disarm")
-def force_disarm(station: StationDep) -> JSONResponse:
-    return _answer(station.command("force-disarm"))
+@router.post("/force-disarm", response_model=CommandResult)
+def force_disarm(vehicle: VehicleDep) -> JSONResponse:
+    return _answer(vehicle.command("force-disarm"))
 
 
-@router.post("/land")
-def land(station: StationDep) -> JSONResponse:
-    return _answer(station.command("land"))
+@router.post("/land", response_model=CommandResult)
+def land(vehicle: VehicleDep) -> JSONResponse:
+    return _answer(vehicle.command("land"))
 
 
-@router.post("/rtl")
-def rtl(station: StationDep) -> JSONResponse:
-    return _answer(station.command("rtl"))
+@router.post("/rtl", response_model=CommandResult)
+def rtl(vehicle: VehicleDep) -> JSONResponse:
+    return _answer(vehicle.command("rtl"))
 
 
-@router.post("/takeoff")
-def takeoff(body: Takeoff, station: StationDep) -> JSONResponse:
-    return _answer(station.command("takeoff", body.altitude_m))
+@router.post("/takeoff", response_model=CommandResult)
+def takeoff(body: Takeoff, vehicle: VehicleDep) -> JSONResponse:
+    return _answer(vehicle.command("takeoff", body.altitude_m))
 
 
-@router.post("/mode")
-def set_mode(body: Mode, station: StationDep) -> JSONResponse:
-    return _answer(station.command("mode", body.mode))
+@router.post("/mode", response_model=CommandResult)
+def set_mode(body: Mode, vehicle: VehicleDep) -> JSONResponse:
+    return _answer(vehicle.command("mode", body.mode))

@@ -243,6 +243,7 @@ function asCommandResult(data: unknown): CommandResult | null {
     result_name: typeof d.result_name === "string" ? d.result_name : "",
     reasons: Array.isArray(d.reasons) ? d.reasons.map(String) : [],
     detail: typeof d.detail === "string" ? d.detail : "",
+    elapsed_s: typeof d.elapsed_s === "number" ? d.elapsed_s : 0,
   };
 }
 

@@ -1,6 +1,12 @@
-// The server <-> dashboard contract (api.md) as TypeScript types, plus the parsers
-// that turn wire data into them. Parsers check shape at the edge and throw
-// ProtocolError with a sentence, so a bad message is counted, never a crash.
+// The server <-> dashboard contract, plus the parsers that turn wire data into it.
+// The types come from the server's OpenAPI document (api-types.ts, made by
+// `make types` from backend/api/schemas.py and backend/api/messages.py; never edit
+// it by hand). Parsers check shape at the edge and throw ProtocolError with a
+// sentence, so a bad message is counted, never a crash.
+
+import type { components } from "./api-types";
+
+type Schemas = components["schemas"];
 
 export class ProtocolError extends Error {
   constructor(message: string) {
@@ -11,135 +17,28 @@ export class ProtocolError extends Error {
 
 export type Point = [number, number];
 
-export interface LinkStatus {
-  state: "connecting" | "up" | "lost" | "closed" | string;
-  url: string;
-  heartbeat_age_s: number | null;
-  msgs_per_s?: number;
-  crc_errors?: number;
-}
-
-export interface CameraStatus {
-  name?: string;
-  state?: string;
-  fps?: number;
-  frames?: number;
-  errors?: number;
-  last_error?: string | null;
-}
-
-export interface PipelineStatus {
-  fps?: number;
-  latency_ms?: number | null;
-  processed?: number;
-  dropped?: number;
-  detected_rate?: number;
-}
-
-export interface Status {
-  link: LinkStatus;
-  camera: CameraStatus;
-  pipeline: PipelineStatus;
-  mission: Record<string, unknown> | null;
-  reference: ReferenceSummary | null;
-  flight: { id: string | number; dir: string } | null;
-  viser_url: string;
-}
-
-export interface ReferenceSummary {
-  id: string | number;
-  name: string;
-  pad_size_m: number;
-  created: string | number;
-  active: boolean;
-  corners_m: Point[];
-  hu: number[];
-  orientation_deg: number;
-  eccentricity: number;
-  symmetric: boolean;
-  image_size: [number, number];
-  images: { original: string; threshold: string; corners: string };
-  /** The corner-pattern verifier trained for this reference (RBM/DBN). */
-  verifier?: VerifierStatus;
-}
-
-export interface VerifierStatus {
-  state: "off" | "queued" | "training" | "ready" | "unavailable" | "failed";
-  progress: number;
-  detail: string;
-}
-
-export interface PoseDict {
-  position_m: [number, number, number];
-  R_pad_cam: number[][];
-  yaw_deg: number;
-  reprojection_px: number;
-  symmetric: boolean;
-}
-
-export interface FrameResult {
-  detected: boolean;
-  corners_px: Point[];
-  hu: (number | null)[];
-  orientation_deg: number | null;
-  eccentricity: number | null;
-  pose: PoseDict | null;
-  timings_ms: Record<string, number>;
-  contour_px: Point[];
-  score: number | null;
-  reason: string;
-}
-
-export interface Overlay {
-  contour: Point[];
-  corners: Point[];
-  reference_corners: Point[];
-  axes: { origin: Point; x: Point; y: Point; z: Point } | null;
-  target: Point | null;
-}
-
-export interface FrameMessage {
-  type: "frame";
-  seq: number;
-  t_capture: number;
-  latency_ms: number;
-  width: number;
-  height: number;
-  result: FrameResult;
-  overlay: Overlay;
-  reference_distance: number | null;
-}
-
-/** Telemetry.to_dict() of backend.link; read through lib/telemetry.ts accessors. */
-export type Telemetry = Record<string, unknown>;
-
-export interface HelloMessage {
-  type: "hello";
-  status: Status;
-  telemetry: Telemetry;
-  reference: ReferenceSummary | null;
-  settings: Record<string, unknown>;
-}
-
-export interface TelemetryMessage extends Record<string, unknown> {
-  type: "telemetry";
-}
-
-export interface EventMessage {
-  type: "event";
-  kind: string;
-  text: string;
-  t: number;
-  [extra: string]: unknown;
-}
-
-export interface StatusMessage extends Status {
-  type: "status";
-}
-
-export interface PongMessage {
-  type: "pong";
-}
+export type LinkStatus = Schemas["LinkStatus"];
+export type CameraStatus = Schemas["CameraStatus"];
+export type PipelineStatus = Schemas["PipelineStatus"];
+export type Status = Schemas["Status"];
+export type ReferenceSummary = Schemas["ReferenceSummary"];
+export type VerifierStatus = Schemas["VerifierStatus"];
+export type MissionSnapshot = Schemas["MissionSnapshot"];
+export type PoseDict = Schemas["Pose"];
+export type FrameResult = Schemas["FrameResult"];
+export type Overlay = Schemas["Overlay"];
+export type FrameMessage = Schemas["FrameMessage"];
+export type PublicSettings = Schemas["PublicSettings"];
+/** The link's telemetry snapshot; read through lib/telemetry.ts accessors. */
+export type Telemetry = Schemas["Telemetry"];
+export type HelloMessage = Schemas["HelloMessage"];
+export type TelemetryMessage = Schemas["TelemetryMessage"];
+export type EventMessage = Schemas["EventMessage"];
+export type StatusMessage = Schemas["StatusMessage"];
+export type PongMessage = Schemas["PongMessage"];
+export type CommandResult = Schemas["CommandResult"];
+export type BinaryFrameHeader = Schemas["BinaryFrameHeader"];
+export type ClientMessage = Schemas["PingMessage"] | Schemas["SubscribeMessage"] | Schemas["AuthMessage"];
 
 export type ServerMessage =
   | HelloMessage
@@ -148,23 +47,6 @@ export type ServerMessage =
   | EventMessage
   | StatusMessage
   | PongMessage;
-
-export interface CommandResult {
-  ok: boolean;
-  command: string;
-  result: number | null;
-  result_name: string;
-  reasons: string[];
-  detail: string;
-}
-
-export interface BinaryFrameHeader {
-  kind: "camera" | "threshold";
-  seq: number;
-  t_capture: number;
-  width: number;
-  height: number;
-}
 
 export interface BinaryFrame {
   header: BinaryFrameHeader;
@@ -199,6 +81,10 @@ export function parseServerMessage(text: string): ServerMessage {
       if (typeof value.seq !== "number") throw new ProtocolError("frame without a numeric seq");
       if (!isObject(value.result)) throw new ProtocolError("frame without a result object");
       if (!isObject(value.overlay)) value.overlay = emptyOverlay();
+      // The contour and corners travel once, in the result: drawn from there.
+      for (const key of ["contour_px", "corners_px"] as const) {
+        if (!Array.isArray(value.result[key])) value.result[key] = [];
+      }
       break;
     case "status":
       if (!isObject(value.link)) throw new ProtocolError("status without a link object");
@@ -214,7 +100,7 @@ export function parseServerMessage(text: string): ServerMessage {
 }
 
 export function emptyOverlay(): Overlay {
-  return { contour: [], corners: [], reference_corners: [], axes: null, target: null };
+  return { reference_corners: [], axes: null, target: null };
 }
 
 const textDecoder = new TextDecoder("utf-8", { fatal: true });

@@ -1,8 +1,6 @@
-// Reads backend.link's Telemetry.to_dict() into the flat view the flight panel shows.
+// Reads the Telemetry snapshot (protocol.ts) into the flat view the flight panel shows.
 // The reader accepts the small variations a snapshot may have (nested objects or
 // arrays, missing groups before the first message of a kind) and never throws.
-
-import type { Telemetry } from "./protocol";
 
 export interface StatusText {
   t: number | null;
@@ -85,8 +83,8 @@ function deg(rad: number | null): number | null {
   return rad === null ? null : rad * RAD;
 }
 
-function statustextsOf(t: Telemetry): StatusText[] {
-  const raw = t.statustexts;
+function statustextsOf(t: unknown): StatusText[] {
+  const raw = get(t, "statustexts");
   if (!Array.isArray(raw)) return [];
   const out: StatusText[] = [];
   for (const item of raw) {
@@ -112,8 +110,9 @@ function statustextsOf(t: Telemetry): StatusText[] {
   return out;
 }
 
-export function readTelemetry(t: Telemetry | null | undefined): FlightView {
-  const x: Telemetry = t ?? {};
+/** Reads any snapshot-like value (a Telemetry, a partial one, or older shapes). */
+export function readTelemetry(t: unknown): FlightView {
+  const x: unknown = t ?? {};
   const alt = num(x, "relative_alt_m", "global_position.relative_alt_m", "altitude_m");
   const down = num(x, "position_ned.z", "position_ned.2");
   return {

@@ -166,13 +166,16 @@ export function mountCameraView(root: HTMLElement, ctx: Ctx): void {
 
   function drawOverlay(g: CanvasRenderingContext2D, f: FrameMessage, width: number, cssWidth: number): void {
     const o = f.overlay;
+    // The H's own contour and corners come with the result (sent once, not again here).
+    const contour = f.result.contour_px;
+    const corners = f.result.corners_px;
     // keep strokes ~2 CSS px whatever the frame size
     const px = width / Math.max(cssWidth, 1);
     g.lineJoin = "round";
-    if (enabled.contour && o.contour.length > 1) {
+    if (enabled.contour && contour.length > 1) {
       g.strokeStyle = COLORS.contour;
       g.lineWidth = 2 * px;
-      polyline(g, o.contour, true);
+      polyline(g, contour, true);
     }
     if (enabled.reference && o.reference_corners.length > 0) {
       g.strokeStyle = COLORS.reference;
@@ -183,10 +186,10 @@ export function mountCameraView(root: HTMLElement, ctx: Ctx): void {
         g.stroke();
       }
     }
-    if (enabled.corners && o.corners.length > 0) {
+    if (enabled.corners && corners.length > 0) {
       g.font = `${Math.round(11 * px)}px ui-monospace, monospace`;
       g.textBaseline = "bottom";
-      o.corners.forEach(([x, y], i) => {
+      corners.forEach(([x, y], i) => {
         g.fillStyle = COLORS.corners;
         g.fillRect(x - 3 * px, y - 3 * px, 6 * px, 6 * px);
         const label = String(i + 1);

@@ -98,16 +98,19 @@ export function mountInvariants(root: HTMLElement, ctx: Ctx): void {
     const hu1 = (s: InvariantSample) => (s.detected ? s.hu[0] ?? null : null);
     const hu2 = (s: InvariantSample) => (s.detected && s.hu[1] !== null && s.hu[1] !== undefined ? s.hu[1] * 10 : null);
     const values = samples.flatMap((s) => [hu1(s), hu2(s)]).filter((v): v is number => v !== null);
-    if (ref) values.push(ref.hu[0], ref.hu[1] * 10);
+    const refHu1 = ref?.hu[0] ?? null;
+    const refHu2 = ref?.hu[1] === null || ref?.hu[1] === undefined ? null : ref.hu[1] * 10;
+    for (const v of [refHu1, refHu2]) if (v !== null) values.push(v);
     const lo = Math.min(0, ...values);
     const hi = Math.max(1e-3, ...values) * 1.1;
     axisLabels(g, bottom, lo, hi, (v) => v.toPrecision(2));
     if (ref) {
       g.setLineDash([4, 4]);
       for (const [v, color] of [
-        [ref.hu[0], COLORS.series[0]],
-        [ref.hu[1] * 10, COLORS.series[1]],
-      ] as [number, string][]) {
+        [refHu1, COLORS.series[0]],
+        [refHu2, COLORS.series[1]],
+      ] as [number | null, string][]) {
+        if (v === null) continue;
         const y = bottom.y + bottom.h - ((v - lo) / (hi - lo || 1)) * bottom.h;
         g.strokeStyle = color;
         g.lineWidth = 1;

@@ -22,15 +22,14 @@ describe("parseServerMessage", () => {
     expect(ev).toMatchObject({ kind: "link_lost", text: "" });
   });
 
-  it("fills a missing overlay of a frame with an empty one", () => {
+  it("fills a missing overlay and missing points of a frame with empty ones", () => {
     const msg = parseServerMessage(JSON.stringify({ type: "frame", seq: 1, result: { detected: false } }));
     expect(msg.type === "frame" && msg.overlay).toEqual({
-      contour: [],
-      corners: [],
       reference_corners: [],
       axes: null,
       target: null,
     });
+    expect(msg.type === "frame" && [msg.result.contour_px, msg.result.corners_px]).toEqual([[], []]);
   });
 
   it.each([

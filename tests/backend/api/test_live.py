@@ -21,7 +21,14 @@ from pymavlink import mavutil
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
-from backend.api.ws import unpack_binary
+from backend.api.messages import (
+    BinaryFrameHeader,
+    FrameMessage,
+    HelloMessage,
+    StatusMessage,
+    TelemetryMessage,
+)
+from backend.encoder import unpack_binary
 from tests.backend.api.support import AUTH, LiveServer, make_settings, wait_for
 
 pytestmark = pytest.mark.slow
@@ -107,25 +114,24 @@ def test_ws_hello_telemetry_frames_and_jpeg(live):
     with connect(live.ws_url, open_timeout=5) as ws:
         hello = json.loads(ws.recv(timeout=5))
         assert hello["type"] == "hello" and hello["telemetry"]["state"] == "up"
+        HelloMessage.model_validate(hello)  # every message holds to the typed contract
         telemetry = recv_until(ws, lambda m: isinstance(m, dict) and m["type"] == "telemetry")
         assert "armed" in telemetry
+        TelemetryMessage.model_validate(telemetry)
         frame = recv_until(ws, lambda m: isinstance(m, dict) and m["type"] == "frame")
-        assert set(frame["overlay"]) == {
-            "contour",
-            "corners",
-            "reference_corners",
-            "axes",
-            "target",
-        }
+        FrameMessage.model_validate(frame)
+        assert set(frame["overlay"]) == {"reference_corners", "axes", "target"}
         assert frame["width"] == 640 and frame["height"] == 480
         assert {"detected", "corners_px", "hu", "pose"} <= set(frame["result"])
         binary = recv_until(ws, lambda m: isinstance(m, bytes))
         header, jpeg = unpack_binary(binary)
+        BinaryFrameHeader.model_validate(header)
         assert header["kind"] == "camera" and header["seq"] >= frame["seq"]
         image = cv2.imdecode(np.frombuffer(jpeg, np.uint8), cv2.IMREAD_COLOR)
         assert image.shape == (header["height"], header["width"], 3)
         status = recv_until(ws, lambda m: isinstance(m, dict) and m["type"] == "status")
         assert status["pipeline"]["processed"] > 0
+        StatusMessage.model_validate(status)
 
 
 def test_ws_threshold_frames_only_when_asked(live):
@@ -246,7 +252,7 @@ def test_takeoff_after_guided_and_arm(live, http):
 def test_link_lost_shows_when_the_stand_in_stops(live, http):
     with connect(live.ws_url, open_timeout=5) as ws:
         json.loads(ws.recv(timeout=5))
-        live.station.vehicle_server.stop()
+        live.station.stand_in.stop()
         event = recv_until(
             ws,
             lambda m: isinstance(m, dict) and m["type"] == "event" and m["kind"] == "link_lost",

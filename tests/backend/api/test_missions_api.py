@@ -129,7 +129,7 @@ def test_hover_then_abort_then_land_by_vision(client):
         timeout=90,
         step=0.5,
     )
-    assert done["state"] == "landed", done["message"]
+    assert done["state"] == "landed", done
     wait_for(lambda: current(client)["stored"], timeout=5)
     touchdown = done["touchdown"]
     assert touchdown["source"] == "telemetry"

@@ -1,4 +1,4 @@
-"""The hub's message building: binary framing and the overlay drawn from a real result."""
+"""The frame messages: binary framing, the overlay drawn from a real result, one encoding."""
 
 from __future__ import annotations
 
@@ -6,11 +6,20 @@ import json
 import struct
 import time
 
+import cv2
 import numpy as np
 import pytest
 
-from backend.api.ws import frame_message, overlay_for, pack_binary, unpack_binary
+from backend.api.messages import BinaryFrameHeader, FrameMessage
 from backend.camera import Frame
+from backend.encoder import (
+    FrameEncoder,
+    frame_message,
+    overlay_for,
+    pack_binary,
+    unpack_binary,
+)
+from backend.framebus import FrameBus
 from backend.vision_worker import Processed
 from pipeline import Camera, Reference, process_frame
 from pipeline.render import camera_rotation, make_pad_image, make_scene, project_points, render
@@ -49,7 +58,7 @@ def seen():
 def test_overlay_projects_the_reference_through_the_pose(seen):
     processed, position, R = seen
     overlay = overlay_for(processed)
-    corners = np.array(overlay["corners"])
+    corners = np.array(frame_message(processed)["result"]["corners_px"])
     reprojected = np.array(overlay["reference_corners"])
     assert corners.shape == (12, 2) and reprojected.shape == (12, 2)
     # The reference corners, put through the measured pose, land where the true pose
@@ -62,7 +71,7 @@ def test_overlay_projects_the_reference_through_the_pose(seen):
     truth = project_points(CAMERA, position, R, np.zeros((1, 3)))[0]
     assert np.hypot(*(np.array(overlay["target"]) - truth)) < 3.0
     assert overlay["axes"]["origin"] == overlay["target"]
-    assert len(overlay["contour"]) >= 12
+    assert len(frame_message(processed)["result"]["contour_px"]) >= 12
 
 
 def test_frame_message_is_json_and_complete(seen):
@@ -85,3 +94,29 @@ def test_no_pose_means_no_projected_overlay(seen):
     assert overlay["reference_corners"] == [] and overlay["axes"] is None
     assert overlay["target"] is None
     assert frame_message(p)["reference_distance"] is None
+
+
+def test_one_encoding_serves_the_viewers_and_the_recorder(seen):
+    processed, _, _ = seen
+    encoder = FrameEncoder(FrameBus("in").subscribe("x"), FrameBus("out"), jpeg_quality=lambda: 80)
+    plain = encoder.encode(processed)
+    assert plain.threshold_message is None  # nobody asked for it
+    encoder.threshold_wanted = True
+    enc = encoder.encode(processed)
+    msg = FrameMessage.model_validate_json(enc.text)  # the contract's model
+    assert msg.seq == 3 and msg.result.detected
+    data = json.loads(enc.text)
+    # The contour and the corners travel once: in the result, not again in the overlay.
+    assert set(data["overlay"]) == {"reference_corners", "axes", "target"}
+    assert enc.text.count('"contour_px"') == 1
+    assert json.loads(enc.result_json) == data["result"]
+    header, jpeg = unpack_binary(enc.camera_message)
+    BinaryFrameHeader.model_validate(header)
+    assert header["kind"] == "camera" and jpeg == enc.jpeg and jpeg[:2] == b"\xff\xd8"
+    # The threshold view is the mask the pipeline worked on.
+    header, jpeg = unpack_binary(enc.threshold_message)
+    assert header["kind"] == "threshold"
+    mask = cv2.imdecode(np.frombuffer(jpeg, np.uint8), cv2.IMREAD_GRAYSCALE)
+    assert mask.shape == processed.result.mask.shape
+    agree = np.mean((mask > 127) == (processed.result.mask > 0))
+    assert agree > 0.98  # JPEG blurs the edges a little

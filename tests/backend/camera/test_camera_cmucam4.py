@@ -27,7 +27,7 @@ from backend.camera.cmucam4 import (
     sf_seconds,
 )
 from backend.camera.rgb565 import decode_rgb565, encode_rgb565, read_dump_bmp
-from backend.sim.cmucam4 import CMUcam4Board, Faults
+from sim.cmucam4 import CMUcam4Board, Faults
 
 pytestmark = [pytest.mark.timeout(30), pytest.mark.usefixtures("no_leftover_threads")]
 SCALE = 0.02  # an SF 160x120 takes ~0.1 s instead of ~5 s

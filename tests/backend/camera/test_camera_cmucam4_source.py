@@ -12,8 +12,8 @@ import pytest
 from backend.camera import open_source
 from backend.camera.cmucam4 import CMUcam4Error, CMUcam4Source, TPacket
 from backend.camera.rgb565 import decode_rgb565, encode_rgb565
-from backend.camera.sim_source import PadRenderer, SimCameraConfig, VehiclePose
-from backend.sim.cmucam4 import CMUcam4Board, Faults
+from sim.camera import PadRenderer, SimCameraConfig, VehiclePose
+from sim.cmucam4 import CMUcam4Board, Faults
 
 pytestmark = [pytest.mark.timeout(40), pytest.mark.usefixtures("no_leftover_threads")]
 SCALE = 0.02

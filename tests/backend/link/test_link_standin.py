@@ -1,4 +1,4 @@
-"""The link against the ArduCopter stand-in (backend/sim/vehicle) over real TCP sockets."""
+"""The link against the ArduCopter stand-in (sim/vehicle) over real TCP sockets."""
 
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ import pytest
 from pymavlink import mavutil
 
 from backend.link import LinkEvent, LinkState, Telemetry, VehicleLink
-from backend.sim.vehicle import SimConfig, SimVehicle, VehicleServer
+from sim.vehicle import SimConfig, SimVehicle, VehicleServer
 
 SPEEDUP = 4.0  # flights run at four times real time to keep the tests short
 
@@ -247,7 +247,7 @@ def test_signed_link_with_the_standin_cli(make_link, tmp_path) -> None:
         [
             sys.executable,
             "-m",
-            "backend.sim.vehicle",
+            "sim.vehicle",
             "--mavlink",
             f"tcp:127.0.0.1:{port}",
             "--ready-after",

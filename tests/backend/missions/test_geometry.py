@@ -7,7 +7,6 @@ import math
 import numpy as np
 import pytest
 
-from backend.camera.sim_source import SimCameraConfig, VehiclePose, camera_pose_in_pad_frame
 from backend.missions.geometry import (
     DOWN_MOUNT,
     heading_error_deg,
@@ -17,6 +16,7 @@ from backend.missions.geometry import (
     wrap180,
 )
 from pipeline import Camera, Pose
+from sim.camera import SimCameraConfig, VehiclePose, camera_pose_in_pad_frame
 
 CAM = Camera.from_fov(640, 480, 60.0)
 
@@ -94,7 +94,7 @@ def test_bad_inputs_raise_value_error():
 
 
 def test_down_mount_matches_the_simulated_camera():
-    from backend.camera.sim_source import DOWN_MOUNT as CAMERA_DOWN_MOUNT
+    from sim.camera import DOWN_MOUNT as CAMERA_DOWN_MOUNT
 
     np.testing.assert_array_equal(DOWN_MOUNT, CAMERA_DOWN_MOUNT)
 

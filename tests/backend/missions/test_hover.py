@@ -7,7 +7,7 @@ import math
 import pytest
 
 from backend.missions import HoverConfig, HoverMission, LandConfig
-from backend.scenarios.land import PAD_NE, LockstepDriver, RunSpec, camera_config, fly
+from bench.scenarios.land import PAD_NE, LockstepDriver, RunSpec, camera_config, fly
 
 pytestmark = pytest.mark.slow
 

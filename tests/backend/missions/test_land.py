@@ -10,7 +10,7 @@ from __future__ import annotations
 import pytest
 
 from backend.missions import LandConfig, LandMission
-from backend.scenarios.land import PAD_NE, LockstepDriver, RunSpec, fly_to_start, run_one
+from bench.scenarios.land import PAD_NE, LockstepDriver, RunSpec, fly_to_start, run_one
 
 pytestmark = pytest.mark.slow
 

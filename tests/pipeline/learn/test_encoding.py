@@ -40,7 +40,7 @@ SIMILARITY_BLOCKS = ("corners", "shape", "anisotropy", "residual", "offsets")
 _SCENES: dict = {}
 
 
-def _h_candidate(reference, texture, yaw=25.0, tilt=0.0, size_m=0.55, height=2.0, gate=0.1):
+def _h_candidate(reference, texture, yaw=25.0, tilt=0.0, size_m=0.55, height=2.0, gate=0.4):
     """The H candidate (ordered corners, contour) of a real rendered frame.
 
     The camera leans ``tilt`` degrees toward pad direction 40 deg and stands back

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from pipeline import Camera, Reference
-from pipeline.frame import MAX_SHAPE_RESIDUAL
 from pipeline.learn import PoorReference, Verifier, train_verifier
 from pipeline.learn.data import (
+    MAX_SHAPE_RESIDUAL,
     CandidateSet,
     collect,
     frame_candidates,

@@ -1,0 +1,349 @@
+"""The HTTP contract: a pydantic model for every response (and every error body).
+
+These models are the source of the OpenAPI document, from which ``make types``
+generates the dashboard's TypeScript types (``frontend/src/lib/api-types.ts``).
+The WebSocket's messages are in :mod:`backend.api.messages`. Numbers that may be
+non-finite inside the station are ``null`` on the wire.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+Point = tuple[float, float]
+
+
+class Model(BaseModel):
+    """Base of the contract's models: unknown fields are an error (the contract is whole)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+
+# --- errors and commands ------------------------------------------------------------------
+class ErrorResponse(Model):
+    """Every error answer: one sentence for the operator."""
+
+    detail: str = Field(description="what went wrong, in one sentence")
+
+
+class CommandResult(Model):
+    """What became of one vehicle command (also the body of its error answers)."""
+
+    ok: bool = Field(description="accepted by the vehicle (or, unacknowledged, sent)")
+    command: str
+    result: int | None = Field(description="the COMMAND_ACK's MAV_RESULT, if one came")
+    result_name: str = Field(
+        description="ACCEPTED, FAILED, ... or LINK_DOWN, TIMEOUT, INVALID_ARGUMENT, SENT, "
+        "SEND_FAILED, MISMATCH, STARTED, ABORTED"
+    )
+    reasons: list[str] = Field(description="the vehicle's own refusal texts, verbatim")
+    detail: str = Field(description="one sentence for the operator")
+    elapsed_s: float = 0.0
+
+
+class Health(Model):
+    ok: bool
+    version: str
+
+
+# --- telemetry ----------------------------------------------------------------------------
+class Attitude(Model):
+    roll: float | None
+    pitch: float | None
+    yaw: float | None
+    rollspeed: float | None
+    pitchspeed: float | None
+    yawspeed: float | None
+
+
+class Vec3(Model):
+    x: float | None
+    y: float | None
+    z: float | None
+
+
+class GlobalPosition(Model):
+    lat_deg: float | None
+    lon_deg: float | None
+    alt_msl_m: float | None
+
+
+class GpsStatus(Model):
+    fix_type: int
+    satellites: int | None
+    hdop: float | None
+
+
+class EkfStatus(Model):
+    flags: int
+    healthy: bool
+    pos_horiz_ok: bool
+
+
+class Battery(Model):
+    voltage_v: float | None
+    current_a: float | None
+    remaining_pct: int | None
+
+
+class StatusText(Model):
+    time: float
+    severity: int
+    text: str
+
+
+class LandingTargetSent(Model):
+    x: float | None
+    y: float | None
+    z: float | None
+    distance: float | None
+    time_usec: float | None
+    sent_monotonic: float | None
+
+
+LinkStateName = Literal["connecting", "up", "lost", "closed"]
+
+
+class Telemetry(Model):
+    """The link's telemetry snapshot (``backend.link.Telemetry``); null until reported."""
+
+    state: LinkStateName
+    vehicle_sysid: int | None
+    armed: bool
+    mode: str | None
+    mode_number: int | None
+    system_status: int | None
+    attitude: Attitude | None
+    position_ned: Vec3 | None
+    velocity_ned: Vec3 | None
+    relative_alt_m: float | None
+    global_position: GlobalPosition | None
+    heading_deg: float | None
+    gps: GpsStatus | None
+    ekf: EkfStatus | None
+    battery: Battery | None
+    rangefinder_m: float | None
+    prearm_ok: bool | None
+    statustexts: list[StatusText]
+    msgs_per_s: float | None
+    crc_errors: int
+    heartbeat_age_s: float | None
+    packets_lost_pct: float | None
+    handler_errors: int
+    reconnects: int
+    last_error: str | None
+    attitude_time_boot_ms: int | None
+    attitude_rx_monotonic: float | None
+    local_position_time_boot_ms: int | None
+    local_position_rx_monotonic: float | None
+    landing_targets_sent: int
+    last_landing_target: LandingTargetSent | None
+
+
+# --- references ---------------------------------------------------------------------------
+class VerifierStatus(Model):
+    state: Literal["off", "queued", "training", "ready", "unavailable", "failed"]
+    progress: float
+    detail: str
+
+
+class ReferenceImages(Model):
+    original: str
+    threshold: str
+    corners: str
+
+
+class ReferenceSummary(Model):
+    id: int
+    name: str
+    pad_size_m: float
+    created: float
+    active: bool
+    corners_m: list[Point]
+    hu: list[float | None]
+    orientation_deg: float | None
+    eccentricity: float | None
+    symmetric: bool
+    image_size: tuple[int, int]
+    images: ReferenceImages
+    verifier: VerifierStatus
+
+
+# --- missions -----------------------------------------------------------------------------
+class PadFix(Model):
+    """Where the pad was, relative to the vehicle, in one frame."""
+
+    t_capture: float | None
+    time_usec: int
+    target_frd: list[float | None]
+    distance_m: float | None
+    offset_ned: list[float | None]
+    height_m: float | None
+    heading_error_deg: float | None
+    image_px: list[float | None]
+
+
+class Touchdown(Model):
+    north_m: float | None
+    east_m: float | None
+    yaw_deg: float | None
+    error_m: float | None
+    heading_error_deg: float | None
+    source: Literal["truth", "telemetry"]
+
+
+class MissionSnapshot(Model):
+    """A mission's live state (the precision-landing panel)."""
+
+    kind: Literal["hover", "land", "mission"]
+    strategy: Literal["plnd", "guided"] | None
+    state: str
+    state_age_s: float
+    elapsed_s: float
+    outcome: str | None
+    message: str
+    frames: int
+    detections: int
+    targets_sent: int
+    target_age_s: float | None
+    pad_seen_age_s: float | None
+    fix: PadFix | None
+    image_size: tuple[int, int] | None
+    touchdown: Touchdown | None
+    run_id: int | None
+    stored: bool
+
+
+class MissionCommand(CommandResult):
+    """A mission command's answer: the command's shape plus the mission's live state."""
+
+    mission: MissionSnapshot
+
+
+class MissionRunSummary(Model):
+    id: int
+    kind: str
+    started: float
+    ended: float | None
+    outcome: str | None
+    strategy: str | None
+    message: str
+    touchdown: Touchdown | None
+    duration_s: float | None
+    frames: int | None
+    detections: int | None
+    targets_sent: int | None
+
+
+class StateChange(Model):
+    t: float
+    state: str
+    reason: str
+
+
+class MissionRecord(Model):
+    """A run's whole record; while it runs only ``strategy`` and ``config`` are there."""
+
+    kind: str | None = None
+    strategy: str | None = None
+    config: dict[str, Any] = Field(default_factory=dict)
+    states: list[StateChange] = Field(default_factory=list)
+    targets: list[list[Any]] = Field(
+        default_factory=list, description="[t, kind, values...] per target sent"
+    )
+    targets_sent: int = 0
+    frames: int = 0
+    detections: int = 0
+    notes: list[str] = Field(default_factory=list)
+    touchdown: Touchdown | None = None
+    outcome: str | None = None
+    message: str = ""
+    duration_s: float | None = None
+
+
+class MissionRun(Model):
+    id: int
+    kind: str
+    started: float
+    ended: float | None
+    outcome: str | None
+    detail: MissionRecord
+
+
+# --- flights, status, settings ------------------------------------------------------------
+class FlightRef(Model):
+    """The flight being recorded: its id and folder."""
+
+    id: int
+    dir: str
+
+
+class FlightSummary(Model):
+    id: int
+    started: float
+    ended: float | None
+    frames: int
+    reason: str
+    end_reason: str | None
+    tlog: str = Field(description="URL of its .tlog")
+    results: str = Field(description="URL of its results (JSON lines)")
+
+
+class FlightFrame(Model):
+    seq: int
+    url: str
+
+
+class LinkStatus(Model):
+    state: LinkStateName
+    url: str
+    heartbeat_age_s: float | None
+    msgs_per_s: float | None
+    crc_errors: int
+
+
+class CameraStatus(Model):
+    name: str
+    state: Literal["starting", "streaming", "stalled", "error", "closed"]
+    fps: float
+    frames: int
+    errors: int
+    last_error: str
+
+
+class PipelineStatus(Model):
+    fps: float
+    latency_ms: float | None
+    processed: int
+    dropped: int
+    detected_rate: float
+    errors: int
+    last_error: str
+
+
+class Status(Model):
+    """Link, camera, pipeline, mission, reference, flight and 3D view, in one snapshot."""
+
+    link: LinkStatus
+    camera: CameraStatus
+    pipeline: PipelineStatus
+    mission: MissionSnapshot | None
+    reference: ReferenceSummary | None
+    flight: FlightRef | None
+    viser_url: str | None
+
+
+class PublicSettings(Model):
+    """The settings the operator may change, and the fixed facts of this start."""
+
+    view_requires_token: bool
+    record_frames: bool
+    jpeg_quality: int
+    max_upload_bytes: int
+    camera: str
+    mavlink: str
+    pad_size_m: float
+    pad_heading_deg: float
+    simulated_vehicle: bool

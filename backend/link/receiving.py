@@ -1,0 +1,176 @@
+"""The link's reader thread: receive, cache the latest message per type, dispatch.
+
+Each message goes to its handlers (a dict from type to handler, each isolated in its
+own try/except, so one bad message can never stall the link); a dropped transport is
+reopened with a back-off.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable
+from typing import Any
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from backend.link.connection import Transport, TransportDropped
+from backend.link.core import _BACKOFF_S, LinkCore
+from backend.link.state import LinkState
+from backend.link.telemetry import STATUSTEXT_HISTORY, TELEMETRY_HANDLERS, StatusText
+
+log = logging.getLogger("backend.link.vehicle_link")
+
+# HEARTBEATs that do not come from a vehicle (ourselves, other GCSs, gimbals, radios)
+_NOT_VEHICLE_TYPES = frozenset(
+    {
+        mavlink2.MAV_TYPE_GCS,
+        mavlink2.MAV_TYPE_GIMBAL,
+        mavlink2.MAV_TYPE_ADSB,
+        mavlink2.MAV_TYPE_ONBOARD_CONTROLLER,
+        mavlink2.MAV_TYPE_CAMERA,
+    }
+)
+
+
+class LinkReceiver(LinkCore):
+    """The reader thread of :class:`~backend.link.VehicleLink`."""
+
+    _link_handlers: dict[str, Callable[[Any], None]]
+
+    # ------------------------------------------------------------------ reader thread
+    def _reader_loop(self) -> None:
+        transport = self._transport
+        assert transport is not None
+        try:
+            self._read_until_stopped(transport)
+        finally:
+            transport.close()  # also when close() came while a connect was under way
+
+    def _read_until_stopped(self, transport: Transport) -> None:
+        backoff = _BACKOFF_S[0]
+        while not self._stop.is_set():
+            if not transport.is_open:
+                try:
+                    transport.open()
+                except Exception as exc:  # refused, no device, bad address: retry later
+                    self._note_error(f"cannot open {self.url}: {exc}")
+                    self._stop.wait(backoff)
+                    backoff = min(backoff * 2, _BACKOFF_S[1])
+                    continue
+                backoff = _BACKOFF_S[0]
+                self._apply({"reconnects": max(0, transport.opened - 1)})
+                self._wake.set()  # heartbeat at once: a UDP/TCP vehicle learns about us
+                continue
+            try:
+                msg = transport.recv_msg()
+            except TransportDropped as exc:
+                transport.close()
+                self._note_error(str(exc))
+                if self._state == LinkState.UP:
+                    self._set_state(LinkState.LOST, str(exc))
+                self._stop.wait(_BACKOFF_S[0])
+                continue
+            except Exception as exc:  # a parser fault: count it, drop the buffer, go on
+                self._handler_errors += 1
+                log.exception("MAVLink parser fault; buffer dropped")
+                self._note_error(f"parser fault: {exc}")
+                transport.reset_parser()
+                continue
+            if msg is None:
+                transport.wait_readable(0.05)
+                continue
+            self._dispatch(msg)
+
+    def _dispatch(self, msg: Any) -> None:
+        mtype = msg.get_type()
+        if mtype == "BAD_DATA":
+            return  # counted by the parser (receive_errors)
+        self._rx_count += 1
+        src = (msg.get_srcSystem(), msg.get_srcComponent())
+        now = time.monotonic()
+        if mtype == "HEARTBEAT":
+            if not self._is_vehicle_heartbeat(msg):
+                return
+            if self._target is None:
+                self._target = src
+            if src != self._target:
+                return
+            self._last_hb = now
+            if self._state != LinkState.UP:
+                self._set_state(LinkState.UP, f"heartbeat from system {src[0]}")
+        target = self._target
+        if target is None or src[0] != target[0]:
+            return
+        self._latest[mtype] = msg
+        handler = TELEMETRY_HANDLERS.get(mtype)
+        if handler is not None:
+            self._run_isolated(mtype, self._apply_handler, handler, msg, now)
+        link_handler = self._link_handlers.get(mtype)
+        if link_handler is not None:
+            self._run_isolated(mtype, link_handler, msg)
+
+    def _run_isolated(self, mtype: str, fn: Callable[..., None], *args: Any) -> None:
+        try:
+            fn(*args)
+        except Exception:
+            self._handler_errors += 1
+            # the first few in full, then a reminder now and then: never a log flood
+            if self._handler_errors <= 5 or self._handler_errors % 1000 == 0:
+                log.exception("handler for %s failed (%d so far)", mtype, self._handler_errors)
+
+    def _apply_handler(
+        self, handler: Callable[[Any, float], dict[str, Any]], msg: Any, now: float
+    ) -> None:
+        changes = handler(msg, now)
+        old = self._telemetry
+        self._apply(changes)
+        if msg.get_type() == "HEARTBEAT":
+            new = self._telemetry
+            if new.mode_number != old.mode_number:
+                self._emit(
+                    "mode_changed",
+                    {"mode": new.mode, "mode_number": new.mode_number, "previous": old.mode},
+                )
+            if new.armed != old.armed:
+                self._emit("armed" if new.armed else "disarmed", {"mode": new.mode})
+
+    @staticmethod
+    def _is_vehicle_heartbeat(msg: Any) -> bool:
+        return (
+            msg.type not in _NOT_VEHICLE_TYPES
+            and msg.autopilot != mavlink2.MAV_AUTOPILOT_INVALID
+            and msg.get_srcComponent() != mavlink2.MAV_COMP_ID_GIMBAL
+        )
+
+    def _on_command_ack(self, msg: Any) -> None:
+        addressed = getattr(msg, "target_system", 0)
+        if addressed not in (0, self._source_system):
+            return  # an answer to another ground station
+        matched = self._tracker.on_ack(msg.command, msg.result, getattr(msg, "progress", 0))
+        if (
+            not matched
+            and msg.command == mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL
+            and msg.result != mavlink2.MAV_RESULT_ACCEPTED
+        ):
+            self._streams.refused()
+            self._wake.set()
+
+    def _on_statustext(self, msg: Any) -> None:
+        text = self._statustexts.feed(msg)
+        if text is None:
+            return
+        entry = StatusText(time.time(), int(msg.severity), text)
+        history = (*self._telemetry.statustexts, entry)[-STATUSTEXT_HISTORY:]
+        self._apply({"statustexts": history})
+        self._tracker.on_statustext(entry.severity, text)
+        self._emit("statustext", {"severity": entry.severity, "text": text})
+
+    def _on_param_value(self, msg: Any) -> None:
+        with self._param_cond:
+            self._params[str(msg.param_id)] = (
+                float(msg.param_value),
+                int(msg.param_type),
+                time.monotonic(),
+            )
+            self._param_cond.notify_all()

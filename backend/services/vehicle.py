@@ -1,0 +1,58 @@
+"""The vehicle as the routes see it: commands by name, telemetry, the mission settings.
+
+Commands block the calling thread until the vehicle's COMMAND_ACK or a timeout
+(the routes run them on worker threads).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from backend.link import CommandResult, LinkState, Telemetry, VehicleLink
+from backend.missions import LandConfig
+from backend.settings import Settings
+
+#: The commands the API offers, by route name.
+COMMANDS = ("arm", "disarm", "force-disarm", "land", "rtl", "takeoff", "mode")
+
+
+class VehicleService:
+    """One vehicle over ``link`` (``url``: what it is connected to)."""
+
+    def __init__(self, link: VehicleLink, settings: Settings, *, url: str) -> None:
+        self.link = link
+        self.url = url
+        self._settings = settings
+
+    @property
+    def telemetry(self) -> Telemetry:
+        return self.link.telemetry
+
+    @property
+    def link_up(self) -> bool:
+        return self.link.state == LinkState.UP
+
+    def command(self, name: str, *args: Any) -> CommandResult:
+        """Run one command of :data:`COMMANDS` (blocks until ACK or timeout)."""
+        link = self.link
+        method: dict[str, Callable[..., CommandResult]] = {
+            "arm": link.arm,
+            "disarm": link.disarm,
+            "force-disarm": link.force_disarm,
+            "land": link.land,
+            "rtl": link.rtl,
+            "takeoff": link.takeoff,
+            "mode": link.set_mode,
+        }
+        return method[name](*args)
+
+    def land_config(self, **changes: Any) -> LandConfig:
+        """Mission settings for this station's pad (its place and heading from settings)."""
+        s = self._settings
+        return LandConfig(
+            pad_north_m=s.pad_north,
+            pad_east_m=s.pad_east,
+            pad_heading_deg=s.pad_heading_deg,
+            **changes,
+        )

@@ -1,0 +1,15 @@
+"""The vision library's own benchmark: ``python -m pipeline.bench`` prints JSON.
+
+- no mode: the default pad, 1-6 m, today's degradation mix (figures comparable
+  with every earlier run);
+- ``--design NAME|all``: per pad design (`pipeline.render.DESIGNS`), with a summary;
+- ``--sweep altitude|snr|tilt``: detection, pose error and time per point for
+  Visland, ArUco and AprilTag 3 on the same poses, and range90 (`pipeline.bench.sweep`);
+- ``--report DIR``: the dissertation's experiments reproduced (`pipeline.bench.report`).
+
+One core (``cv2.setNumThreads(1)``, one torch thread); times are wall-clock per frame.
+"""
+
+from pipeline.bench.accuracy import run, run_designs
+
+__all__ = ["run", "run_designs"]

@@ -1,0 +1,81 @@
+"""``python -m pipeline.bench [--design NAME|all] [--sweep KIND] [--report DIR] ...``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from pipeline.bench import accuracy
+from pipeline.bench.frames import DEGRADE_LEVELS
+from pipeline.preprocess import DEFAULT_METHOD, METHODS
+
+SWEEPS = ("altitude", "snr", "tilt")
+RESOLUTIONS = ("640x480", "1280x720")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m pipeline.bench", description=sys.modules["pipeline.bench"].__doc__
+    )
+    parser.add_argument("--frames", type=int, help="frames (per sweep point); 200 or 20")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--methods", default=",".join(METHODS), help="thresholdings to compare")
+    parser.add_argument("--design", help="a design name, comma-separated names, or 'all'")
+    parser.add_argument("--degrade", choices=DEGRADE_LEVELS, default="today")
+    parser.add_argument("--sweep", choices=SWEEPS)
+    parser.add_argument(
+        "--resolution", choices=RESOLUTIONS, help="sweep resolution (altitude: both by default)"
+    )
+    parser.add_argument("--plot", metavar="DIR", help="write the sweep's PNG plots here")
+    parser.add_argument("--report", metavar="DIR", help="the dissertation's experiments")
+    parser.add_argument("--quick", action="store_true", help="report: fewer frames (a smoke run)")
+    args = parser.parse_args(argv)
+    if args.frames is not None and args.frames <= 0:
+        parser.error("--frames must be positive")
+    methods = [m for m in args.methods.split(",") if m]
+    if not methods or any(m not in METHODS for m in methods):
+        parser.error(f"--methods must name some of {METHODS}")
+    if DEFAULT_METHOD not in methods and not (args.sweep or args.report):
+        parser.error(f"--methods must include {DEFAULT_METHOD}")
+    if args.sweep and args.report:
+        parser.error("--sweep and --report are separate runs")
+    try:
+        out = _dispatch(args, methods)
+    except ValueError as exc:
+        parser.error(str(exc))
+    print(json.dumps(out, indent=2))
+    return 0
+
+
+def _dispatch(args: argparse.Namespace, methods: list[str]) -> dict:
+    if args.report:
+        from pipeline.bench.report import write_report
+
+        return write_report(args.report, seed=args.seed, frames=args.frames, quick=args.quick)
+    if args.sweep:
+        from pipeline.bench.sweep import run_sweep
+
+        if args.resolution:
+            resolutions = [args.resolution]
+        else:
+            resolutions = list(RESOLUTIONS) if args.sweep == "altitude" else [RESOLUTIONS[0]]
+        return run_sweep(
+            args.sweep,
+            resolutions=[tuple(int(v) for v in r.split("x")) for r in resolutions],
+            frames=args.frames or 20,
+            seed=args.seed,
+            design=args.design or "default",
+            degrade=args.degrade,
+            method=DEFAULT_METHOD if DEFAULT_METHOD in methods else methods[0],
+            plot_dir=args.plot,
+        )
+    frames = args.frames or 200
+    if args.design is None:
+        return accuracy.run(frames, args.seed, methods, degrade=args.degrade)
+    names = accuracy.design_names(args.design)
+    return accuracy.run_designs(names, frames, args.seed, methods, degrade=args.degrade)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,236 @@
+"""Sweeps: ``python -m pipeline.bench --sweep altitude|snr|tilt [--resolution WxH] [--plot DIR]``.
+
+At each point of the sweep, ``frames`` views of the pad (a random yaw, the pad
+anywhere in the image, the ``--degrade`` mix with the swept quantity fixed) are
+rendered, and the same views of an ArUco marker (DICT_4X4_50) and of an AprilTag 3
+marker (tag36h11) whose black squares are the pad's size. For each detector and
+point: detection rate, position error (% of altitude) and rotation error (degrees)
+against the truth, and milliseconds per frame; the frames go to each detector at
+their native resolution (60 degree HFOV).
+
+- ``altitude``: 1 m to the altitude where the pad spans 12 px (for the 0.55 m pad:
+  ~25 m at 640x480, ~51 m at 1280x720; other pads scaled with their size), and
+  ``range90_m`` per detector: the highest altitude up to which every point has
+  >= 90 % detection;
+- ``snr``: 5-40 dB at the bench's altitudes (1-6 m for the 0.55 m pad);
+- ``tilt``: 0-45 degrees off nadir at the bench's altitudes.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from pipeline import Camera, Reference, process_frame
+from pipeline.bench.frames import SCENE_EVERY, Scenes, make_scenes, make_view
+from pipeline.bench.markers import AprilTagDetector, ArucoDetector, settings
+from pipeline.bench.plot import line_panel, save
+from pipeline.bench.tally import Tally
+from pipeline.preprocess import DEFAULT_METHOD
+from pipeline.render import PAD_SIZE_M, Design, get_design
+from pipeline.render.view import render_view
+
+DETECTORS = ("visland", "aruco", "apriltag")
+SNR_POINTS_DB = (5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0)
+TILT_POINTS_DEG = (0.0, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0, 45.0)
+FAR_SPAN_PX = 12.0  # the altitude sweep ends where the pad spans this many pixels
+RANGE_RATE = 0.9
+_SCENE_POOL = 4  # scene sets shared by all points (a set takes ~1 s to build)
+_X_KEY = {"altitude": "altitude_m", "snr": "snr_db", "tilt": "tilt_deg"}
+
+
+def altitude_points(design: Design, camera: Camera) -> list[float]:
+    """1-10 m by 1, then by 2 to 20, then by 4, up to where the pad spans 12 px (0.55 m
+    pad; other pads scaled by their size), that last altitude included."""
+    k = design.size_m / PAD_SIZE_M
+    far = camera.fx * design.size_m / FAR_SPAN_PX
+    base = [*range(1, 11), *range(12, 21, 2), *range(24, 400, 4)]
+    pts = [b * k for b in base if b * k < far - 0.25 * k]
+    return [round(p, 3) for p in [*pts, far]]
+
+
+def range90(xs: list[float], rates: list[float]) -> float | None:
+    """The highest x up to which every point's rate is >= 0.9 (None if the first fails).
+
+    >>> range90([1, 2, 3, 4], [1.0, 0.95, 0.5, 1.0])
+    2
+    """
+    best = None
+    for x, r in zip(xs, rates, strict=True):
+        if r < RANGE_RATE:
+            break
+        best = x
+    return best
+
+
+def run_sweep(
+    kind: str,
+    *,
+    resolutions: list[tuple[int, int]],
+    frames: int = 20,
+    seed: int = 0,
+    design: str = "default",
+    degrade: str = "today",
+    method: str = DEFAULT_METHOD,
+    plot_dir: str | None = None,
+) -> dict:
+    """The sweep's JSON (see the module docstring); PNG plots into ``plot_dir``."""
+    if kind not in _X_KEY:
+        raise ValueError(f"sweep must be one of {tuple(_X_KEY)}, got {kind!r}")
+    if frames <= 0:
+        raise ValueError(f"frames must be positive, got {frames}")
+    cv2.setNumThreads(1)
+    d = get_design(design)
+    try:
+        reference: Reference | None = Reference.from_image(d.draw().image, d.size_m)
+        ref_error = None
+    except ValueError as exc:
+        reference, ref_error = None, str(exc)
+    pool: dict[int, Scenes] = {}
+    out: dict = {
+        "sweep": kind,
+        "design": d.name,
+        "pad_size_m": d.size_m,
+        "degrade": degrade,
+        "frames_per_point": frames,
+        "seed": seed,
+        "hfov_deg": 60.0,
+        "method": method,
+        "reference_error": ref_error,
+        "markers": settings(),
+        "resolutions": {},
+    }
+    for width, height in resolutions:
+        camera = Camera.from_fov(width, height, 60.0)
+        if kind == "altitude":
+            xs = altitude_points(d, camera)
+        else:
+            xs = list(SNR_POINTS_DB if kind == "snr" else TILT_POINTS_DEG)
+        points = []
+        for p, x in enumerate(xs):
+            tallies = {name: Tally() for name in DETECTORS}
+            detectors = {"aruco": ArucoDetector(d.size_m), "apriltag": AprilTagDetector(d.size_m)}
+            for j in range(frames):
+                slot = ((p * frames + j) // SCENE_EVERY) % _SCENE_POOL
+                if slot not in pool:
+                    pool[slot] = make_scenes(d, [seed, 1000 + slot], degrade, ("aruco", "apriltag"))
+                scenes = pool[slot]
+                view, noise_seed = make_view([seed, p, j, 11], camera, d, degrade, **_fix(kind, x))
+                frame = render_view(scenes.pad, camera, view, np.random.default_rng(noise_seed))
+                _visland(tallies["visland"], frame, reference, camera, view, d, method)
+                for name, det in detectors.items():
+                    img = render_view(
+                        scenes.markers[name], camera, view, np.random.default_rng(noise_seed)
+                    )
+                    t0 = time.perf_counter()
+                    pose = det.pose(img, camera)
+                    tallies[name].time(time.perf_counter() - t0, {})
+                    tallies[name].score(pose is not None, pose, view, False)
+            point = {_X_KEY[kind]: x}
+            if kind == "altitude":
+                point["pad_span_px"] = camera.fx * d.size_m / x
+            point |= {name: _point_summary(t) for name, t in tallies.items()}
+            points.append(point)
+            if sys.stderr.isatty():
+                print(f"\r{kind} {width}x{height} {p + 1}/{len(xs)}", end="", file=sys.stderr)
+        res: dict = {"points": points}
+        if kind == "altitude":
+            res["range90_m"] = {
+                name: range90(xs, [pt[name]["detection_rate"] for pt in points])
+                for name in DETECTORS
+            }
+            res["altitude_where_pad_spans_22px_m"] = camera.fx * d.size_m / 22.0
+            res["altitude_where_pad_spans_12px_m"] = camera.fx * d.size_m / FAR_SPAN_PX
+        out["resolutions"][f"{width}x{height}"] = res
+    if sys.stderr.isatty():
+        print(file=sys.stderr)
+    if plot_dir is not None:
+        out["plots"] = plot_sweep(out, plot_dir)
+    return out
+
+
+def _fix(kind: str, x: float) -> dict:
+    """`random_view` keywords that pin the swept quantity."""
+    if kind == "altitude":
+        return {"altitude": (x, x)}
+    if kind == "snr":
+        return {"snr_db": (x, x)}
+    return {"min_tilt_deg": x, "max_tilt_deg": x}
+
+
+def _visland(tally, frame, reference, camera, view, design, method) -> None:
+    if reference is None:
+        tally.score(False, None, view, design.symmetric)
+        return
+    t0 = time.perf_counter()
+    res = process_frame(frame, reference, camera, method=method)
+    tally.time(time.perf_counter() - t0, {})
+    tally.score(res.detected and res.pose is not None, res.pose, view, design.symmetric)
+
+
+def _point_summary(t: Tally) -> dict:
+    s = t.summary()
+    return {k: s[k] for k in ("detection_rate", "position_error_pct", "rotation_error_deg")} | {
+        "ms_per_frame": s["ms_per_frame"]
+    }
+
+
+def plot_sweep(result: dict, plot_dir: str) -> list[str]:
+    """One PNG per resolution: detection, position error and time against the sweep."""
+    kind = result["sweep"]
+    key = _X_KEY[kind]
+    xlabel = {"altitude": "altitude (m)", "snr": "SNR (dB)", "tilt": "tilt (deg)"}[kind]
+    paths = []
+    for res_name, res in result["resolutions"].items():
+        pts = res["points"]
+        xs = [p[key] for p in pts]
+
+        def series(field: str, stat: str | None, pts=pts, xs=xs) -> dict:
+            return {
+                name: (xs, [p[name][field] if stat is None else p[name][field][stat] for p in pts])
+                for name in DETECTORS
+            }
+
+        title = f"{result['design']} pad, {res_name}, {result['degrade']} mix"
+        if kind == "altitude":
+            r90 = ", ".join(
+                f"{n} {v if v is None else round(v, 1)}" for n, v in res["range90_m"].items()
+            )
+            title += f" - range90 (m): {r90}"
+        panels = [
+            line_panel(
+                series("detection_rate", None),
+                title=title,
+                xlabel=xlabel,
+                ylabel="detection",
+                ylim=(0.0, 1.0),
+                hlines=[(0.9, "90 %")],
+            ),
+            line_panel(
+                series("position_error_pct", "median"),
+                title="position error, median (% of altitude)",
+                xlabel=xlabel,
+                ylabel="% of alt.",
+                log_y=True,
+            ),
+            line_panel(
+                series("rotation_error_deg", "median"),
+                title="rotation error, median (degrees)",
+                xlabel=xlabel,
+                ylabel="degrees",
+                log_y=True,
+            ),
+            line_panel(
+                series("ms_per_frame", "median"),
+                title="time per frame, median (ms, one core)",
+                xlabel=xlabel,
+                ylabel="ms",
+            ),
+        ]
+        name = f"sweep_{kind}_{result['design']}_{res_name}.png"
+        paths.append(save(Path(plot_dir) / name, panels))
+    return paths

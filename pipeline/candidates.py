@@ -1,0 +1,233 @@
+"""From a frame's bright regions to located H's: shape gate, corners, edge-fitted homography.
+
+Each region of the thresholded channel is compared with the reference's H by
+its affine-normalised shape (``pipeline.shape_match``), which is cheap and
+indifferent to the view's tilt and to the H's proportions. The survivors, best
+first, get their 12 corners: the seed's way first (curvature-scale-space
+corners on the boundary, put in the reference's order, kept when a homography
+maps the reference's corners onto them), else from the affine map the shape
+match found. Either start is refined by fitting the H's sides to the
+channel's edges (``pipeline.homography_fit``); the fit must find most of the
+H's edges where it puts them.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from pipeline.homography_fit import HomographyFit, apply_h, fit_homography
+from pipeline.preprocess import Binarized
+from pipeline.reference import H_CORNERS, Reference
+from pipeline.shapes import Region, douglas_peucker, polygon_corners, upsampled_contour
+
+MIN_H_AREA_PX = 24.0  # smaller regions carry too few pixels for an H
+MIN_H_SPAN_PX = 12.0  # nor can an H narrower than this be told from a blob of texture
+MIN_SHAPE_IOU = 0.4  # whitened overlap with the reference's H (look-alikes rank below)
+MAX_SHAPE_RESIDUAL = 0.1  # CSS corners: homography RMS / sqrt(area) (real H < 0.05)
+MIN_H_SUPPORT = 0.6  # share of the H's sides found on the channel's edges
+CONFIDENT_SUPPORT = 0.9  # a fit this good is not tried from another start
+# Edge support plus shape overlap: two views of how much of an H this is. Real
+# H's, even drawn with other proportions than the reference's, reach 1.45 and
+# up; H-ish blobs of grass or sensor noise stay under 1.4 (measured on the
+# shared real photos and the bench's floors).
+MIN_EVIDENCE = 1.45
+MIN_BLOB_SEPARATION = 3.0  # the region against the band around it, in pooled std devs
+FINE_TRACE_BELOW_PX = 4000.0  # H's smaller than this are traced on a finer grid
+FINE_FACTOR = 4
+MAX_LOCATED = 6  # candidates fitted per frame at most, best shape first
+
+
+@dataclass(frozen=True, eq=False)
+class Candidate:
+    """A region shaped like the H: its boundary and shape overlap."""
+
+    region: Region
+    iou: float
+    affine: np.ndarray  # 2 x 3, pad metres -> pixels, from the shape match
+
+    @property
+    def hu(self) -> tuple[float, ...]:
+        """Hu's seven invariants of the region (the seed's moments)."""
+        return tuple(cv2.HuMoments(cv2.moments(self.region.contour.reshape(-1, 1, 2))).ravel())
+
+
+@dataclass(frozen=True, eq=False)
+class Located:
+    """A candidate whose H's sides were found: corners in the reference's order."""
+
+    candidate: Candidate
+    corners: np.ndarray  # (12, 2) pixels
+    fit: HomographyFit
+    start: str  # "css" (the seed's corners) or "shape" (the affine shape match)
+
+    @property
+    def evidence(self) -> float:
+        """Edge support plus shape overlap (0..2)."""
+        return self.fit.support + self.candidate.iou
+
+
+def candidates(found: list[Region], reference: Reference) -> list[Candidate]:
+    """Regions whose whitened shape overlaps the reference's H, most alike first."""
+    out = []
+    lo = 0.5 * reference.solidity
+    for r in found:
+        if not lo <= r.solidity <= 0.97:
+            continue
+        if float(np.ptp(r.contour, axis=0).max()) < MIN_H_SPAN_PX:
+            continue
+        hit = reference.shape.match(r.contour, MIN_SHAPE_IOU)
+        if hit is None:
+            continue
+        out.append(Candidate(r, hit.iou, hit.affine))
+    out.sort(key=lambda c: -c.iou)
+    return out
+
+
+def locate_all(found: list[Region], binary: Binarized, reference: Reference) -> Iterator[Located]:
+    """Located H's among the regions, best shape first (at most ``MAX_LOCATED`` tried)."""
+    smooth = binary.smooth.astype(np.float32)
+    for cand in candidates(found, reference)[:MAX_LOCATED]:
+        located = locate(cand, binary, reference, smooth)
+        if located is not None:
+            yield located
+
+
+def locate(
+    cand: Candidate, binary: Binarized, reference: Reference, smooth: np.ndarray
+) -> Located | None:
+    """Fit the H's sides from the candidate's shape match, then if that does not
+    find them well, from its CSS corners (the seed's reading); the fit that
+    finds more of the H's edges wins.
+
+    The affine start of the shape match needs no corners at all: it holds for
+    thin strokes, serifs and blur that leave CSS a skewed reading (which may
+    converge to a stretched H). The seed's corners do better on a bold H drawn
+    with other proportions than the reference's.
+    """
+    span = math.sqrt(cand.region.area)
+    best: Located | None = None
+    for name in ("shape", "css"):
+        if name == "shape":
+            H0 = np.vstack([cand.affine, [0.0, 0.0, 1.0]])
+            # An affine start may be a few pixels off on a tilted view.
+            search = float(np.clip(0.12 * span, 2.5, 3.0))
+        else:
+            css = css_corners(cand.region, binary, reference)
+            H0 = None if css is None else cv2.findHomography(reference.corners_m, css, 0)[0]
+            if H0 is None:
+                continue
+            search = 2.5
+        fit = fit_homography(smooth, reference.h_edges, H0, search_px=search)
+        if fit is None or fit.support < MIN_H_SUPPORT:
+            continue
+        corners = apply_h(fit.H, reference.corners_m)
+        if float(np.ptp(corners, axis=0).max()) < MIN_H_SPAN_PX:
+            continue
+        if best is None or (fit.support, -fit.rms_px) > (best.fit.support, -best.fit.rms_px):
+            best = Located(cand, corners, fit, name)
+        if best is not None and best.fit.support >= CONFIDENT_SUPPORT:
+            break  # the H's edges were found: no need for another start
+    return best
+
+
+def blob_separation(
+    smooth: np.ndarray,
+    region: Region,
+    stroke_px: float,
+    board_only: Callable[[np.ndarray], np.ndarray] | None = None,
+) -> float:
+    """How clearly a region stands out from the band around it: (mean inside - mean
+    of the band) / pooled standard deviation, on the smoothed channel.
+
+    A painted H is uniform on a uniform board; an H-ish blob of grass or sensor
+    noise has more of the same around it. The band starts a pixel out (past the
+    blurred edge) and is a stroke wide; ``board_only`` (frame pixels, N x 2 ->
+    bool) keeps the band's pixels that are board.
+    """
+    c = region.contour.reshape(-1, 1, 2).astype(np.int32)
+    x, y, w, h = cv2.boundingRect(c)
+    reach = int(max(2.0, round(stroke_px)))
+    p = reach + 2
+    x0, y0 = max(x - p, 0), max(y - p, 0)
+    x1, y1 = min(x + w + p, smooth.shape[1]), min(y + h + p, smooth.shape[0])
+    m = np.zeros((y1 - y0, x1 - x0), np.uint8)
+    cv2.fillPoly(m, [c - np.array([x0, y0], np.int32)], 1)
+    k3 = np.ones((3, 3), np.uint8)
+    core = cv2.erode(m, k3) if stroke_px >= 4 else m
+    near = cv2.dilate(m, k3)
+    far = cv2.dilate(m, np.ones((2 * reach + 1, 2 * reach + 1), np.uint8))
+    patch = smooth[y0:y1, x0:x1].astype(np.float64)
+    band_mask = (far > 0) & (near == 0)
+    if board_only is not None:
+        # Pixels the reference shows painted (a ring or a frame close to the H)
+        # are not board.
+        ys, xs = np.nonzero(band_mask)
+        keep = board_only(np.column_stack([xs + x0, ys + y0]).astype(np.float64))
+        band_mask[ys[~keep], xs[~keep]] = False
+    inside, band = patch[core > 0], patch[band_mask]
+    if len(inside) < 4 or len(band) < 4:
+        return math.nan
+    pooled = math.sqrt(0.5 * (float(inside.var()) + float(band.var())))
+    return (float(inside.mean()) - float(band.mean())) / max(pooled, 1.0)
+
+
+def css_corners(region: Region, binary: Binarized, reference: Reference) -> np.ndarray | None:
+    """The seed's reading: 12 CSS corners in the reference's order, when they fit it."""
+    for reading in corner_readings(region, binary):
+        ordered, residual = match_corners(reading, reference.corners_m, region.area)
+        if residual <= MAX_SHAPE_RESIDUAL:
+            return ordered
+    return None
+
+
+def corner_readings(region: Region, binary: Binarized) -> Iterator[np.ndarray]:
+    """Ways to read the 12 corners of a candidate, best first.
+
+    Curvature-scale-space corners on the boundary (traced on a 4x finer grid
+    for small candidates), then Douglas-Peucker polygons of the same boundary
+    and of the pixel boundary: blur can round a corner off or add a ripple
+    that CSS takes for one, and the cheaper readings are tried only then.
+    """
+    fine = None
+    if region.area <= FINE_TRACE_BELOW_PX:
+        fine = upsampled_contour(binary.smooth, binary.mask, region, FINE_FACTOR)
+    if fine is not None:
+        pts, offset = fine
+        for poly in (polygon_corners(pts, H_CORNERS), douglas_peucker(pts, H_CORNERS)):
+            if poly is not None:
+                yield (poly + 0.5) / FINE_FACTOR - 0.5 + offset
+    else:
+        poly = polygon_corners(region.contour, H_CORNERS)
+        if poly is not None:
+            yield poly
+    poly = douglas_peucker(region.contour, H_CORNERS)
+    if poly is not None:
+        yield poly
+
+
+def match_corners(poly: np.ndarray, ref_m: np.ndarray, area: float) -> tuple[np.ndarray, float]:
+    """Rotate the corner list onto the reference's order; return it and the fit residual.
+
+    All 12 cyclic shifts are scored at once by an affine fit (a few microseconds);
+    the best is checked with a full homography, whose residual relative to the
+    shape's size says whether this is the reference's H at all.
+    """
+    n = len(ref_m)
+    X = np.column_stack([ref_m, np.ones(n)])
+    P = np.linalg.pinv(X)  # (3, n)
+    shifts = np.stack([np.roll(poly, -s, axis=0) for s in range(n)])  # (n, n, 2)
+    fitted = np.einsum("ij,sjk->sik", X @ P, shifts)
+    err = np.sum((shifts - fitted) ** 2, axis=(1, 2))
+    s = int(np.argmin(err))
+    ordered = shifts[s]
+    H, _ = cv2.findHomography(ref_m, ordered, 0)
+    if H is None:
+        return ordered, math.inf
+    proj = cv2.perspectiveTransform(ref_m.reshape(-1, 1, 2), H).reshape(-1, 2)
+    rms = float(np.sqrt(np.mean(np.sum((proj - ordered) ** 2, axis=1))))
+    return ordered, rms / math.sqrt(area)

@@ -1,0 +1,180 @@
+"""The pad's other marks: every edge of the reference picture beyond the H.
+
+Side bars, rings, a disc's rim, an octagon's or a hexagon's frame, stars, a
+triangle, the board's outer edge: all are edges a frame can show where the
+pose puts them, several times farther apart than the H's, which pins the
+pose's tilt; and the marks that break the H's half-turn symmetry (a triangle,
+stars above the H) tell which of the two headings the pad is seen at.
+
+Each mark is a closed polygon in the picture (curves become polygons with
+short sides), with the side it is bright on: a mark of the H's paint is
+bright inside; the board's rim against a lighter floor, or a ring's hole, is
+dark inside.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from pipeline.edgefit import CURVE_VERTICES
+from pipeline.edges import refine_polygon
+
+MIN_MARK_AREA = 0.0005  # of the picture: smaller specks are texture, not marks
+MAX_MARKS = 16
+FLATNESS = 0.0005  # Douglas-Peucker tolerance, of a mark's perimeter (>= 0.5 px)
+MAX_SIDES = 96
+
+
+@dataclass(frozen=True, eq=False)
+class Mark:
+    """A closed polygon in pad metres and whether the polygon is brighter than
+    its surroundings on the reference's channel."""
+
+    corners_m: np.ndarray
+    bright: bool
+
+    def to_dict(self) -> dict:
+        return {"corners_m": self.corners_m.tolist(), "bright": bool(self.bright)}
+
+
+def find_marks(
+    smooth: np.ndarray, level: float, board_level: float, h_region: np.ndarray
+) -> list[tuple[np.ndarray, bool]]:
+    """Polygons (picture pixels) of the marks on a smoothed channel, with their brightness.
+
+    ``level``: half-way between the H's paint and its board; ``board_level``:
+    the board's. Boundaries of the paint-coloured regions other than the H
+    (outer edges and holes), then the board's own rim against whatever lies
+    beyond it when that differs from the board.
+    """
+    h, w = smooth.shape
+    area = float(h * w)
+    out: list[tuple[float, np.ndarray, bool]] = []
+    paint = (smooth > level).astype(np.uint8)
+    # Every paint region that touches the H is the H (the H was found at
+    # another threshold than this one).
+    _, labels = cv2.connectedComponents(paint)
+    h_labels = np.unique(labels[h_region & (paint > 0)])
+    others = paint.copy()
+    others[np.isin(labels, h_labels[h_labels > 0]) | h_region] = 0
+    out += _boundaries(others, smooth, area, bright_inside=True)
+    # What lies beyond the board (a floor around a disc, the paper around a
+    # card) is told by the picture's rim.
+    rim = np.concatenate([smooth[0], smooth[-1], smooth[:, 0], smooth[:, -1]]).astype(float)
+    beyond = float(np.median(rim))
+    step = abs(level - board_level)
+    if abs(beyond - board_level) > 0.5 * step:
+        cut = 0.5 * (beyond + board_level)
+        board = (smooth < cut) if beyond > board_level else (smooth > cut)
+        board = board.astype(np.uint8)
+        # The board component around the H, holes filled: its outer edge is the pad's rim.
+        _, labels = cv2.connectedComponents(board | (paint > 0) | h_region.astype(np.uint8))
+        ys, xs = np.nonzero(h_region)
+        k = int(np.bincount(labels[ys, xs]).argmax())
+        if k > 0:
+            comp = (labels == k).astype(np.uint8)
+            edge = np.concatenate([comp[0], comp[-1], comp[:, 0], comp[:, -1]])
+            # A disc cropped to its width touches the picture's edge at four
+            # points; a board that runs along it has no rim in the picture.
+            if np.mean(edge) < 0.1:
+                out += _boundaries(
+                    comp, smooth, area, bright_inside=beyond < board_level, holes=False, rim=True
+                )
+    elif abs(beyond - board_level) < 0.25 * step:
+        # The board fills the picture to its edge: the edge is the board's rim.
+        rect = np.array([[-0.5, -0.5], [w - 0.5, -0.5], [w - 0.5, h - 0.5], [-0.5, h - 0.5]])
+        out.append((area, rect, False))
+    out.sort(key=lambda item: -item[0])
+    return [(poly, bright) for _, poly, bright in out[:MAX_MARKS]]
+
+
+def _boundaries(
+    mask: np.ndarray,
+    smooth: np.ndarray,
+    area: float,
+    *,
+    bright_inside: bool,
+    holes: bool = True,
+    rim: bool = False,
+) -> list[tuple[float, np.ndarray, bool]]:
+    mode = cv2.RETR_CCOMP if holes else cv2.RETR_EXTERNAL
+    contours, hierarchy = cv2.findContours(mask, mode, cv2.CHAIN_APPROX_NONE)
+    out = []
+    h, w = mask.shape
+    for i, c in enumerate(contours):
+        a = abs(cv2.contourArea(c))
+        if a < MIN_MARK_AREA * area or a > 0.95 * area:
+            continue
+        x, y, cw, ch = cv2.boundingRect(c)
+        if not rim and (x == 0 or y == 0 or x + cw == w or y + ch == h):
+            continue  # cut by the picture's edge: not a whole mark of the pad
+        is_hole = hierarchy is not None and hierarchy[0][i][3] >= 0
+        poly = _polygon(c)
+        if poly is None:
+            continue
+        if len(poly) <= 8:  # straight-sided: its sides measured on the gray edges
+            refined = refine_polygon(smooth, poly, bright_inside=bright_inside != is_hole)
+            if refined is not None:
+                poly = refined[0]
+        out.append((a, poly, bool(bright_inside != is_hole)))
+    return out
+
+
+def _polygon(contour: np.ndarray) -> np.ndarray | None:
+    """The contour as a polygon: few vertices when its sides are straight (a bar, a
+    star, a frame), else up to MAX_SIDES following a curve within half a pixel."""
+    c = contour.reshape(-1, 1, 2)
+    pts = c.reshape(-1, 2).astype(np.float64)
+    straight = cv2.approxPolyDP(c, 0.01 * cv2.arcLength(c, True), True).reshape(-1, 2)
+    if 3 <= len(straight) <= CURVE_VERTICES and _deviation(pts, straight) < 1.5:
+        return straight.astype(np.float64)
+    eps = max(0.5, FLATNESS * cv2.arcLength(c, True))
+    for _ in range(8):
+        approx = cv2.approxPolyDP(c, eps, True).reshape(-1, 2).astype(np.float64)
+        if len(approx) <= MAX_SIDES:
+            return approx if len(approx) >= 3 else None
+        eps *= 1.5
+    return None
+
+
+def _deviation(pts: np.ndarray, poly: np.ndarray) -> float:
+    """The largest distance from the contour's points to the polygon's sides."""
+    a = poly.astype(np.float64)
+    b = np.roll(a, -1, axis=0)
+    d = b - a
+    len2 = np.maximum(np.sum(d * d, axis=1), 1e-12)
+    t = np.clip(((pts[:, None, :] - a[None]) * d[None]).sum(axis=2) / len2, 0.0, 1.0)
+    near = a[None] + t[..., None] * d[None]
+    return float(np.sqrt(np.sum((pts[:, None, :] - near) ** 2, axis=2)).min(axis=1).max())
+
+
+def symmetric_marks(corners_m: np.ndarray, marks: tuple[Mark, ...]) -> bool:
+    """Whether a half turn about the pad centre maps the H's corners and every mark
+    (by its centre, area and brightness) onto one."""
+    tol = 0.03 * float(np.ptp(corners_m, axis=0).max())
+    d = np.linalg.norm(-corners_m[:, None, :] - corners_m[None, :, :], axis=2)
+    if not np.all(d.min(axis=1) < tol):
+        return False
+    stats = [(_centre(m.corners_m), _area(m.corners_m), m.bright) for m in marks]
+    for c, a, bright in stats:
+        if not any(
+            b == bright and np.linalg.norm(-c - c2) < tol and abs(a - a2) <= 0.1 * max(a, a2)
+            for c2, a2, b in stats
+        ):
+            return False
+    return True
+
+
+def _area(poly: np.ndarray) -> float:
+    x, y = poly[:, 0], poly[:, 1]
+    return 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y)))
+
+
+def _centre(poly: np.ndarray) -> np.ndarray:
+    m = cv2.moments(poly.astype(np.float32).reshape(-1, 1, 2))
+    if abs(m["m00"]) < 1e-12:
+        return poly.mean(axis=0)
+    return np.array([m["m10"] / m["m00"], m["m01"] / m["m00"]])

@@ -1,0 +1,133 @@
+"""Is the located H painted solid? Its strokes, sampled along their middles.
+
+A look-alike can share nearly every edge of the H: an H cut through a leg or
+the crossbar (a broken H) still puts most of its sides where the H's are.
+Along the middle of each stroke the paint must stay as bright as it is a few
+pixels before and after: a gap cut through the stroke shows as a local dip.
+Each point is compared with its own neighbours along the stroke, so shadows
+and uneven light, which change the level slowly, do not read as gaps; the
+brightest point across the stroke is taken, so a reference drawn with other
+stroke widths than the pad in view still samples paint.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import cv2
+import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
+
+from pipeline.homography_fit import apply_h
+
+STEP_PX = 1.0  # along each stroke's middle
+MAX_DIP = 0.35  # of the H's contrast: a deeper dip along a stroke's middle is a gap
+_ACROSS = np.linspace(-1.5, 1.5, 7)  # offsets across a stroke, in half stroke widths
+
+
+def _strokes_m(corners_m: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, float]]:
+    """(start, end, half width) of the left leg, right leg and crossbar's middles, in
+    the 12-corner order (corners 0, 1, 10, 11 are the left leg's, 4-7 the right's,
+    2, 3, 8, 9 the crossbar's inner corners)."""
+    c = corners_m
+
+    def stroke(a: int, b: int, d: int, e: int) -> tuple[np.ndarray, np.ndarray, float]:
+        # The middle runs from the mid-point of side (a, b) to that of side (d, e).
+        half = 0.25 * float(np.linalg.norm(c[b] - c[a]) + np.linalg.norm(c[e] - c[d]))
+        return 0.5 * (c[a] + c[b]), 0.5 * (c[d] + c[e]), half
+
+    return [stroke(0, 1, 11, 10), stroke(4, 5, 7, 6), stroke(2, 9, 3, 8)]
+
+
+def stroke_samples(
+    corners_m: np.ndarray, H: np.ndarray, is_paint: Callable[[np.ndarray], np.ndarray]
+):
+    """Where to sample the strokes and the board beside them, in frame pixels.
+
+    ``is_paint``: which pad points (N x 2 metres) the reference shows painted.
+    Returns (paint, side_a, side_b, a_ok, b_ok, counts): ``paint`` (K x m x 2)
+    holds K points across each of m middle points; the sides lie a
+    stroke-half past the strokes' edges; ``a_ok``/``b_ok`` say which side
+    points are board (not on the H or another painted mark); ``counts``: middle
+    points per stroke.
+    """
+    across, side_a, side_b, counts = [], [], [], []
+    for a, b, half in _strokes_m(corners_m):
+        ends = apply_h(H, np.array([a, b]))
+        length_m = max(float(np.linalg.norm(b - a)), 1e-12)
+        length_px = float(np.linalg.norm(ends[1] - ends[0]))
+        n = max(3, int(length_px / STEP_PX))
+        counts.append(n)
+        d = (b - a) / length_m
+        normal = np.array([-d[1], d[0]])
+        px_per_m = length_px / length_m
+        reach = half + max(1.5, half * px_per_m) / px_per_m
+        inset = min(half / length_m, 0.25)  # a stroke's blurred end is left out
+        t = (inset + (1 - 2 * inset) * np.linspace(0.0, 1.0, n))[:, None]
+        mids = a + t * (b - a)
+        # A reference drawn with thinner or bolder strokes than the pad in view
+        # puts its middles off the pad's: points across a stroke and a half.
+        across.append(mids[None] + (_ACROSS[:, None, None] * half) * normal)
+        side_a.append(mids + reach * normal)
+        side_b.append(mids - reach * normal)
+    paint_m = np.concatenate(across, axis=1)
+    sa, sb = np.concatenate(side_a), np.concatenate(side_b)
+    k, m = paint_m.shape[:2]
+    px = apply_h(H, np.vstack([paint_m.reshape(-1, 2), sa, sb]))
+    return (
+        px[: k * m].reshape(k, m, 2),
+        px[k * m : k * m + m],
+        px[k * m + m :],
+        ~is_paint(sa),
+        ~is_paint(sb),
+        tuple(counts),
+    )
+
+
+def _sample(image: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    p = pts.reshape(-1, 2).astype(np.float32)
+    img = image if image.dtype == np.float32 else image.astype(np.float32)
+    out = cv2.remap(img, p[:, :1], p[:, 1:], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    return out.reshape(len(p), -1)
+
+
+def paint_and_board(
+    image: np.ndarray, weights: np.ndarray, samples
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per middle point, the paint's and the board's value of ``weights . pixel``
+    (the brightest across the stroke; the darker board side), without offset:
+    a change of exposure scales both. Board values are nan where no side is board."""
+    paint, side_a, side_b, a_ok, b_ok, _ = samples
+    w = np.asarray(weights, np.float64)
+    k, m = paint.shape[:2]
+    v = _sample(image, np.vstack([paint.reshape(-1, 2), side_a, side_b])) @ w.reshape(-1, 1)
+    v = v.ravel()
+    centre = v[: k * m].reshape(k, m).max(axis=0)
+    va = np.where(a_ok, v[k * m : k * m + m], np.inf)
+    vb = np.where(b_ok, v[k * m + m :], np.inf)
+    board = np.minimum(va, vb)
+    return centre, np.where(np.isfinite(board), board, np.nan)
+
+
+def deepest_dip(image: np.ndarray, weights, samples) -> float:
+    """The deepest local dip along any stroke's middle, as a share of the H's
+    contrast with the board beside it (0: solid strokes; ~1: a clean gap)."""
+    centre, board = paint_and_board(image, weights, samples)
+    ok = np.isfinite(board)
+    if not ok.any():
+        return float("nan")
+    contrast = float(np.median(centre) - np.median(board[ok]))
+    if contrast <= 0:
+        return 1.0
+    worst = 0.0
+    start = 0
+    for n in samples[5]:
+        c = centre[start : start + n]
+        start += n
+        w = max(2, n // 12)
+        # The brightest within w points before and after each point (itself included).
+        pad = np.full(w, -np.inf)
+        left = sliding_window_view(np.concatenate([pad, c]), w + 1).max(axis=1)
+        right = sliding_window_view(np.concatenate([c, pad]), w + 1).max(axis=1)
+        worst = max(worst, float(np.max(np.minimum(left, right) - c)) / contrast)
+    return worst

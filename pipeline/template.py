@@ -1,0 +1,165 @@
+"""Does the frame look like the reference picture where the H was located?
+
+The reference picture (its colours and its learned channel) is warped into
+the frame by the located homography, around the H, and compared in two ways:
+
+- pattern: normalised cross-correlation of the channels over the H and a
+  margin around it, which ignores exposure and contrast. A shape that fits
+  the H's outline but differs inside or right around it scores low.
+- board: the colour of the board around the H, out to a good part of the H's
+  size, against the reference's at the same places: its brightness relative
+  to the H's (or to the board's own, whichever is brighter) and its hue. The
+  same H painted on a floor, or cut out of another pad, has floor around it:
+  grass, asphalt, tiles, not the pad's black paint or orange fabric. Printing
+  and light change the H's own shade far more than the board's relation to
+  it, so the H's colour is not compared.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from pipeline.homography_fit import apply_h
+
+MARGIN = 0.15  # pattern: the H's bounding box grown by this much of its size
+BOARD_REACH = 0.4  # board: out to this much of the H's size around its bounding box
+MIN_SIDE_PX = 6  # frame patches smaller than this are not compared
+MAX_SIDE_PX = 96  # larger ones are compared at this size
+DARK_LUMA = 40.0  # a board this dark has no reliable hue
+_LUMA = np.array([0.114, 0.587, 0.299])
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """``ncc``: pattern correlation (-1..1). ``board``/``reference_board``: the
+    board's luma over the brighter of the H's and the board's, in the frame and
+    on the reference. ``hue``: L1 distance of the board's chromaticity (r, g, b
+    summing to 1) between frame and reference, nan when either board is too
+    dark to have one. All nan when the patch is too small or off the frame."""
+
+    ncc: float
+    board: float
+    reference_board: float
+    hue: float
+
+
+NOTHING = Comparison(math.nan, math.nan, math.nan, math.nan)
+
+
+def reference_pyramid(image_bgr: np.ndarray, channel: np.ndarray, levels: int = 6):
+    """The reference picture (B, G, R and its learned channel) at halving resolutions."""
+    out = [np.dstack([image_bgr, channel]).astype(np.float32)]
+    while len(out) < levels and min(out[-1].shape[:2]) >= 32:
+        out.append(cv2.pyrDown(out[-1]))
+    return tuple(out)
+
+
+def compare(
+    frame_bgr: np.ndarray,
+    frame_channel: np.ndarray,
+    pyramid: tuple[np.ndarray, ...],
+    px_per_m: float,
+    corners_m: np.ndarray,
+    H: np.ndarray,
+) -> Comparison:
+    """Compare the frame with the reference around the located H.
+
+    ``pyramid``: from `reference_pyramid` (level 0 at ``px_per_m`` pixels per
+    metre, the pad's centre at the picture's centre). ``H``: pad metres ->
+    frame pixels. ``frame_channel``: the frame on the reference's channel.
+    """
+    lo, hi = corners_m.min(axis=0), corners_m.max(axis=0)
+    size = float((hi - lo).max())
+    outer = _box(lo - BOARD_REACH * size, hi + BOARD_REACH * size)
+    inner = _box(lo - MARGIN * size, hi + MARGIN * size)
+    outer_px, inner_px = apply_h(H, outer), apply_h(H, inner)
+    fh, fw = frame_channel.shape[:2]
+    x0, y0 = np.floor(outer_px.min(axis=0)).astype(int)
+    x1, y1 = np.ceil(outer_px.max(axis=0)).astype(int) + 1
+    x0, y0, x1, y1 = max(x0, 0), max(y0, 0), min(x1, fw), min(y1, fh)
+    if x1 - x0 < MIN_SIDE_PX or y1 - y0 < MIN_SIDE_PX:
+        return NOTHING
+    # The pyramid level about as fine as the frame's view of it.
+    frame_span = min(float(np.ptp(outer_px, axis=0).max()), MAX_SIDE_PX)
+    ref_span = (1.0 + 2.0 * BOARD_REACH) * size * px_per_m
+    ratio = max(ref_span / max(frame_span, 1.0), 1.0)
+    level = int(np.clip(math.floor(math.log2(ratio)), 0, len(pyramid) - 1))
+    ref = pyramid[level]
+    k = 2.0**level
+    h0, w0 = pyramid[0].shape[:2]
+    # Level pixel (u, v) is level-0 pixel (k u, k v) (pyrDown centres its kernel on
+    # even pixels) -> pad metres (y up, origin at the picture's centre).
+    to_m = np.array(
+        [
+            [k / px_per_m, 0.0, (0.5 - w0 / 2.0) / px_per_m],
+            [0.0, -k / px_per_m, (h0 / 2.0 - 0.5) / px_per_m],
+            [0.0, 0.0, 1.0],
+        ]
+    )
+    # Large views are compared at most MAX_SIDE_PX across: enough for a pattern.
+    f = min(1.0, MAX_SIDE_PX / max(x1 - x0, y1 - y0))
+    shift = np.array([[f, 0.0, -f * x0], [0.0, f, -f * y0], [0.0, 0.0, 1.0]])
+    M = shift @ H @ to_m
+    dsize = (max(1, round(f * (x1 - x0))), max(1, round(f * (y1 - y0))))
+    warped = cv2.warpPerspective(ref, M, dsize, flags=cv2.INTER_LINEAR, borderValue=(-1,) * 4)
+    seen = warped[..., 3] >= 0  # inside the reference picture
+    near = _polygon_mask(f * (inner_px - [x0, y0]), dsize) & seen
+    around = _polygon_mask(f * (outer_px - [x0, y0]), dsize) & seen
+    if np.count_nonzero(near) < MIN_SIDE_PX * MIN_SIDE_PX:
+        return NOTHING
+    ch_ref = warped[..., 3]
+    ch_frame = _crop(frame_channel, x0, y0, x1, y1, dsize)
+    ncc = _ncc(ch_frame[near], ch_ref[near])
+    # The reference's own levels say which pixels are H and which are board
+    # (the quarter nearest each end, leaving out the blurred edges between).
+    low, high = np.percentile(ch_ref[around], [5, 95])
+    spread = high - low
+    board = around & (ch_ref <= low + 0.25 * spread)
+    paint = near & (ch_ref >= high - 0.25 * spread)
+    if np.count_nonzero(board) < 8 or np.count_nonzero(paint) < 4:
+        return Comparison(ncc, math.nan, math.nan, math.nan)
+    frame = _crop(frame_bgr, x0, y0, x1, y1, dsize)
+    b_f, b_r = np.median(frame[board], axis=0), np.median(warped[..., :3][board], axis=0)
+    p_f, p_r = np.median(frame[paint], axis=0), np.median(warped[..., :3][paint], axis=0)
+    return Comparison(ncc, _relative(b_f, p_f), _relative(b_r, p_r), _hue(b_f, b_r))
+
+
+def _crop(image: np.ndarray, x0: int, y0: int, x1: int, y1: int, dsize) -> np.ndarray:
+    crop = image[y0:y1, x0:x1].astype(np.float32)
+    if crop.shape[1] != dsize[0] or crop.shape[0] != dsize[1]:
+        crop = cv2.resize(crop, dsize, interpolation=cv2.INTER_AREA)
+    return crop
+
+
+def _box(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    return np.array([[lo[0], hi[1]], [hi[0], hi[1]], [hi[0], lo[1]], [lo[0], lo[1]]])
+
+
+def _polygon_mask(poly: np.ndarray, dsize: tuple[int, int]) -> np.ndarray:
+    m = np.zeros((dsize[1], dsize[0]), np.uint8)
+    cv2.fillConvexPoly(m, np.round(poly * 16).astype(np.int32), 1, shift=4)
+    return m > 0
+
+
+def _ncc(a: np.ndarray, b: np.ndarray) -> float:
+    a = a - a.mean()
+    b = b - b.mean()
+    den = math.sqrt(float(np.dot(a, a)) * float(np.dot(b, b)))
+    return float(np.dot(a, b) / den) if den > 1e-9 else math.nan
+
+
+def _relative(board_bgr: np.ndarray, paint_bgr: np.ndarray) -> float:
+    b, p = float(board_bgr @ _LUMA), float(paint_bgr @ _LUMA)
+    return b / max(b, p, 1.0)
+
+
+def _hue(frame_bgr: np.ndarray, ref_bgr: np.ndarray) -> float:
+    if frame_bgr @ _LUMA < DARK_LUMA or ref_bgr @ _LUMA < DARK_LUMA:
+        return math.nan
+    a = frame_bgr / max(float(frame_bgr.sum()), 1.0)
+    b = ref_bgr / max(float(ref_bgr.sum()), 1.0)
+    return float(np.abs(a - b).sum())

@@ -1,0 +1,57 @@
+import numpy as np
+import pytest
+
+from pipeline.render import PadGeometry
+from pipeline.shape_match import ShapeMatcher
+
+H = PadGeometry().h_corners_m
+
+
+def _view(poly, A):
+    return poly @ A[:, :2].T + A[:, 2]
+
+
+def _dense(poly, n=20):
+    """The polygon's outline with n points per side, like a traced contour."""
+    t = np.linspace(0.0, 1.0, n, endpoint=False)[:, None]
+    return np.vstack(
+        [a + t * (b - a) for a, b in zip(poly, np.roll(poly, -1, axis=0), strict=True)]
+    )
+
+
+@pytest.mark.parametrize(
+    "A",
+    [
+        np.array([[900.0, 0.0, 320.0], [0.0, -900.0, 240.0]]),  # straight down
+        np.array([[600.0, 500.0, 100.0], [400.0, -700.0, 300.0]]),  # turned and sheared
+        np.array([[-300.0, 80.0, 50.0], [-60.0, 250.0, 60.0]]),  # small, turned round
+    ],
+)
+def test_any_affine_view_of_the_h_matches_and_maps_its_corners(A):
+    hit = ShapeMatcher.from_polygon(H).match(_view(_dense(H), A))
+    assert hit is not None and hit.iou > 0.85
+    # The H looks the same after a half turn: either numbering is a match.
+    err = min(np.abs(_view(np.roll(H, k, axis=0), hit.affine) - _view(H, A)).max() for k in (0, 6))
+    span = np.ptp(_view(H, A), axis=0).max()
+    assert err < 0.04 * span
+
+
+def test_shapes_that_are_not_the_h_overlap_less():
+    matcher = ShapeMatcher.from_polygon(H)
+    A = np.array([[900.0, 0.0, 320.0], [0.0, -900.0, 240.0]])
+    square = np.array([[-0.1, 0.1], [0.1, 0.1], [0.1, -0.1], [-0.1, -0.1]])
+    a, b = 0.03, 0.12
+    plus = np.array(
+        [[-a, b], [a, b], [a, a], [b, a], [b, -a], [a, -a],
+         [a, -b], [-a, -b], [-a, -a], [-b, -a], [-b, a], [-a, a]]
+    )  # fmt: skip
+    h_iou = matcher.match(_view(_dense(H), A)).iou
+    for other in (square, plus):
+        assert matcher.match(_view(_dense(other), A)).iou < h_iou - 0.1
+    assert matcher.match(_view(_dense(square), A), min_iou=0.9) is None
+
+
+def test_degenerate_contours():
+    matcher = ShapeMatcher.from_polygon(H)
+    assert matcher.match(np.zeros((3, 2))) is None
+    assert matcher.match(np.column_stack([np.arange(20.0), np.zeros(20)])) is None

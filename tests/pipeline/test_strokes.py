@@ -1,0 +1,37 @@
+import numpy as np
+
+from pipeline.homography_fit import apply_h
+from pipeline.render import PadGeometry
+from pipeline.strokes import deepest_dip, stroke_samples
+
+H_M = PadGeometry().h_corners_m
+A = np.array([[700.0, 0.0, 320.0], [0.0, -700.0, 240.0], [0.0, 0.0, 1.0]])
+
+
+def _draw(cut: bool) -> np.ndarray:
+    import cv2
+
+    img = np.full((480, 640, 3), 30, np.uint8)
+    cv2.fillPoly(img, [np.round(apply_h(A, H_M)).astype(np.int32)], (230, 230, 230))
+    if cut:  # a gap across the left leg
+        x0 = int(apply_h(A, H_M[:1])[0, 0])
+        img[180:188, x0 - 4 : x0 + 52] = 30
+    return cv2.GaussianBlur(img, (5, 5), 1.0)
+
+
+def _not_paint(pts):
+    return np.zeros(len(pts), bool)
+
+
+def test_a_solid_h_has_no_dip_and_a_cut_one_has():
+    samples = stroke_samples(H_M, A, _not_paint)
+    weights = np.array([0.114, 0.587, 0.299])
+    assert deepest_dip(_draw(False), weights, samples) < 0.1
+    assert deepest_dip(_draw(True), weights, samples) > 0.6
+
+
+def test_shadows_are_not_gaps():
+    img = _draw(False).astype(np.float32)
+    img[:, 320:] *= 0.5  # a shadow's edge across the crossbar
+    samples = stroke_samples(H_M, A, _not_paint)
+    assert deepest_dip(img.astype(np.uint8), np.array([0.114, 0.587, 0.299]), samples) < 0.35
