@@ -32,6 +32,7 @@ from sim.vehicle.modes import (
     STABILIZE,
     FlightModes,
 )
+from sim.vehicle.navigation import GPS, Navigation
 from sim.vehicle.params import ParamInfo, ParamStore
 from sim.vehicle.physics import (
     GRAVITY,
@@ -42,7 +43,7 @@ from sim.vehicle.physics import (
     Wind,
     euler_from_quat,
 )
-from sim.vehicle.precland import LandingTargetMsg, PrecLand
+from sim.vehicle.precland import LandingTargetMsg, PrecLand, PrecLandStateMachine
 from sim.vehicle.state import Estimate, GuidedTarget, VehicleTruth
 
 ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
@@ -92,6 +93,7 @@ class SimVehicle(FlightModes):
         self.battery_mah_used = 0.0
         self.landed_at: tuple[float, float] | None = None
         self._texts: list[tuple[int, str]] = []
+        self.nav = Navigation(self.params, config.seed)
         self._boot()
 
     # ------------------------------------------------------------------ boot, state
@@ -130,11 +132,16 @@ class SimVehicle(FlightModes):
             maxlen=int(0.3 * self.config.physics_hz) + 2
         )
         # AC_PrecLand creates its backend at boot from PLND_TYPE; PLND_ENABLED gates it live.
-        self._plnd_backend = p.get("PLND_TYPE") == 1
         self.precland = PrecLand(
-            enabled=self._plnd_backend and p.get("PLND_ENABLED") == 1,
+            backend=p.get("PLND_TYPE") == 1,
+            param_enabled=p.get("PLND_ENABLED") == 1,
             est_type=int(p.get("PLND_EST_TYPE")),
         )
+        self._plnd_sm = PrecLandStateMachine()
+        # AP_VisualOdom likewise exists only if VISO_TYPE was 1 at boot.
+        self.nav.reset(viso_backend=p.get("VISO_TYPE") == 1)
+        # Home: where the vehicle boots (the EKF origin), then wherever it arms.
+        self.home_ned: Vec3 = (0.0, 0.0, 0.0)
         self._update_estimate(force=True)
 
     def reboot(self) -> int:
@@ -188,8 +195,8 @@ class SimVehicle(FlightModes):
 
     @property
     def gps_fix(self) -> bool:
-        """GPS has a 3D fix."""
-        return self.boot_s >= self._t(T_GPS_FIX)
+        """GPS has a 3D fix (never while SIM_GPS_DISABLE is 1)."""
+        return self.boot_s >= self._t(T_GPS_FIX) and self.params.get("SIM_GPS_DISABLE") == 0
 
     @property
     def origin_set(self) -> bool:
@@ -203,18 +210,23 @@ class SimVehicle(FlightModes):
 
     @property
     def position_ok(self) -> bool:
-        """The EKF has a position estimate good enough for GPS modes."""
-        return self.boot_s >= self._t(T_POSITION)
+        """The EKF has a horizontal position (GPS from ~42 s after boot, or ExternalNav):
+        GPS modes work and LOCAL_POSITION_NED is sent."""
+        return self.nav.position_ok
+
+    def _gps_usable(self) -> bool:
+        return self.gps_fix and self.boot_s >= self._t(T_POSITION)
 
     def _readiness_failures(self) -> list[str]:
         t = self.boot_s
         if t < self._t(T_ATTITUDE):
             return ["EKF attitude is bad", "GPS 1: Bad fix"]
-        if t < self._t(T_GPS_FIX):
-            return ["GPS 1: Bad fix"]
-        if t < self._t(T_PREARM):
-            return ["AHRS: waiting for home"]
-        return []
+        reasons = [] if self.gps_fix else ["GPS 1: Bad fix"]
+        if self.gps_fix and t < self._t(T_PREARM):
+            reasons.append("AHRS: waiting for home")
+        if self.nav.viso_backend and not self.nav.vision_healthy(self.time_s):
+            reasons.append("VisOdom: not healthy")
+        return reasons
 
     def arming_failures(self, mode: int | None = None) -> list[str]:
         """Every reason ArduCopter would give for refusing to arm in ``mode`` now."""
@@ -312,6 +324,9 @@ class SimVehicle(FlightModes):
         self.land_complete = True
         self._spool = 0.0
         self._disarm_timer = 0.0
+        if self.position_ok:
+            # Arming sets home to the current location; the EKF origin stays put.
+            self.home_ned = self.estimate.position_ned
         self._yaw_t = euler_from_quat(self.body.quat)[2]
         self._enter_mode(self.mode)
         self._text(SEV_INFO, "Arming motors")
@@ -364,6 +379,7 @@ class SimVehicle(FlightModes):
         self._speed_override = None
         self._yaw_goal = None
         self._rtl_state = "climb" if mode == RTL else None
+        self._plnd_sm.init()
 
     def takeoff(self, alt_m: float, must_navigate: bool = True) -> int:
         """MAV_CMD_NAV_TAKEOFF (Mode::do_user_takeoff): armed, landed, a mode that
@@ -376,7 +392,7 @@ class SimVehicle(FlightModes):
         if self.mode not in allowed:
             return FAILED
         est = self.estimate
-        if alt_m <= -est.position_ned[2]:
+        if alt_m <= self.home_ned[2] - est.position_ned[2]:  # already above it (home-relative)
             return FAILED
         self._poscon.reset(est.position_ned, (0.0, 0.0, 0.0))
         self._poscon.reset_z_integrator()
@@ -440,6 +456,20 @@ class SimVehicle(FlightModes):
         """LANDING_TARGET from a companion computer or GCS."""
         self.precland.handle_landing_target(msg, self.time_s)
 
+    def vision_position(self, north: float, east: float, down: float) -> bool:
+        """VISION_POSITION_ESTIMATE (NED, metres, in the vision system's frame)."""
+        return self.nav.vision_position(self.time_s, (north, east, down), self.body.pos)
+
+    def vision_speed(self) -> None:
+        """VISION_SPEED_ESTIMATE."""
+        self.nav.vision_speed()
+
+    def set_ekf_source_set(self, number: float) -> int:
+        """MAV_CMD_SET_EKF_SOURCE_SET (param1 = 1..3)."""
+        if not math.isfinite(number) or not self.nav.set_source_set(round(number)):
+            return FAILED
+        return ACCEPTED
+
     def param_set(self, name: str, value: float) -> ParamInfo | None:
         """PARAM_SET. As in ArduPilot, PLND_ENABLED and PLND_EST_TYPE act at once, but
         the precision-landing backend exists only if PLND_TYPE was 1 at boot."""
@@ -447,7 +477,7 @@ class SimVehicle(FlightModes):
         if info is not None and name == "PLND_EST_TYPE":
             self.precland.est_type = int(info.value)
         if info is not None and name == "PLND_ENABLED":
-            self.precland.enabled = self._plnd_backend and info.value == 1
+            self.precland.param_enabled = info.value == 1
         return info
 
     # ------------------------------------------------------------------ geodesy
@@ -488,8 +518,9 @@ class SimVehicle(FlightModes):
         roll, pitch, yaw = euler_from_quat(b.quat)
         bias = self._bias
         vn = self._vel_noise
+        off = self.nav.offset
         return Estimate(
-            (b.pos[0] + bias[0], b.pos[1] + bias[1], b.pos[2] + bias[2]),
+            (b.pos[0] + bias[0] + off[0], b.pos[1] + bias[1] + off[1], b.pos[2] + bias[2]),
             (b.vel[0] + vn[0], b.vel[1] + vn[1], b.vel[2] + vn[2]),
             roll + bias[3],
             pitch + bias[4],
@@ -498,7 +529,10 @@ class SimVehicle(FlightModes):
         )
 
     def rangefinder_m(self) -> float | None:
-        """Downward rangefinder distance (m), None outside RNGFND1_MIN/MAX_CM."""
+        """Downward rangefinder distance (m); None without one (RNGFND1_TYPE = 0, SITL's
+        default) or outside RNGFND1_MIN/MAX_CM."""
+        if self.params.get("RNGFND1_TYPE") == 0:
+            return None
         roll, pitch, _ = euler_from_quat(self.body.quat)
         c = math.cos(roll) * math.cos(pitch)
         if c < 0.5:
@@ -545,6 +579,7 @@ class SimVehicle(FlightModes):
     def _step_once(self, dt: float) -> None:
         self.time_s += dt
         self._update_estimate()
+        self._navigate(dt)
         self._announce()
         est = self.estimate
         self._history.append((self.time_s, est.position_ned, self.body.quat))
@@ -565,7 +600,6 @@ class SimVehicle(FlightModes):
         for key, when, text in (
             ("tilt", 1.0, "EKF3 IMU0 tilt alignment complete"),
             ("origin", T_ORIGIN, "EKF3 IMU0 origin set"),
-            ("gps", T_POSITION, "EKF3 IMU0 is using GPS"),
         ):
             if key not in self._announced and t >= self._t(when):
                 self._announced.add(key)
@@ -576,20 +610,53 @@ class SimVehicle(FlightModes):
                 if r != "Mode not armable":
                     self._text(SEV_CRITICAL, f"PreArm: {r}")
 
-    def _run_precland(self) -> None:
-        pl = self.precland
-        if not pl.enabled:
+    def _navigate(self, dt: float) -> None:
+        """The EKF's position source; its failsafe when the position is lost."""
+        nav = self.nav
+        was_using, was_lost = nav.using, nav.lost
+        for text in nav.update(self.time_s, dt, self.body.pos, self._gps_usable()):
+            self._text(SEV_INFO if text.startswith("EKF3") else SEV_CRITICAL, text)
+        if nav.using == GPS and was_using != GPS and not was_lost:
+            self._text(SEV_INFO, "EKF3 IMU0 is using GPS")
+        if nav.lost and not was_lost:
+            self._ekf_failsafe()
+
+    def _ekf_failsafe(self) -> None:
+        """Copter::failsafe_ekf_event: land (FS_EKF_ACTION 1) or ALT_HOLD (2) from a mode
+        that needs a position; LAND goes on, without a position."""
+        action = int(self.params.get("FS_EKF_ACTION"))
+        if not self.armed or action == 0 or self.mode not in REQUIRES_POSITION:
             return
-        lag = min(0.25, max(0.02, self.params.get("PLND_LAG")))
-        idx = max(0, len(self._history) - 1 - round(lag * self.config.physics_hz))
-        _, pos, quat = self._history[idx]
+        new = ALT_HOLD if action == 2 else LAND
+        self.mode = new
+        self._enter_mode(new)
+        self._text(SEV_CRITICAL, f"EKF Failsafe: changed to {MODE_NAMES[new]} Mode")
+
+    def _run_precland(self) -> None:
+        """AC_PrecLand::update: the estimator (backend and PLND_ENABLED), then the
+        target's state (any backend); cheap when neither applies."""
+        pl = self.precland
+        if not pl.backend:
+            return
         p = self.params
-        pl.update(
+        rangefinder = self.rangefinder_m()
+        if pl.enabled:
+            lag = min(0.25, max(0.02, p.get("PLND_LAG")))
+            idx = max(0, len(self._history) - 1 - round(lag * self.config.physics_hz))
+            _, pos, quat = self._history[idx]
+            pl.update(
+                self.time_s,
+                pos,
+                quat,
+                rangefinder,
+                (p.get("PLND_CAM_POS_X"), p.get("PLND_CAM_POS_Y"), p.get("PLND_CAM_POS_Z")),
+            )
+        pl.check_target_status(
             self.time_s,
-            pos,
-            quat,
-            self.rangefinder_m(),
-            (p.get("PLND_CAM_POS_X"), p.get("PLND_CAM_POS_Y"), p.get("PLND_CAM_POS_Z")),
+            self._history[-1][1],
+            rangefinder,
+            p.get("PLND_ALT_MIN"),
+            p.get("PLND_ALT_MAX"),
         )
 
     def _after_physics(self, was_on_ground: bool, dt: float) -> None:

@@ -95,7 +95,7 @@ class VehicleServer:
         self._stop = threading.Event()
         self._threads: list[threading.Thread] = []
         self._lock = threading.RLock()  # one thread at a time steps the sim and sends
-        self._home_sent = False
+        self._home_sent: tuple[float, float, float] | None = None  # home last announced
         self._param_queue: deque[int] = deque()
         self._started = False
         self.address = ""
@@ -121,6 +121,8 @@ class VehicleServer:
             "SET_POSITION_TARGET_LOCAL_NED": self._on_position_target_local,
             "SET_POSITION_TARGET_GLOBAL_INT": self._on_position_target_global,
             "LANDING_TARGET": self._on_landing_target,
+            "VISION_POSITION_ESTIMATE": self._on_vision_position,
+            "VISION_SPEED_ESTIMATE": self._on_vision_speed,
             "TIMESYNC": self._on_timesync,
         }
 
@@ -244,8 +246,9 @@ class VehicleServer:
         now = self.sim.time_s
         for severity, text in self.sim.drain_texts():
             self._send(self._mav.statustext_encode(severity, text.encode()[:50]))
-        if not self._home_sent and self.sim.home_set:
-            self._home_sent = True
+        if self.sim.home_set and self._home_sent != self.sim.home_ned:
+            # announced once known, and again whenever arming moves it
+            self._home_sent = self.sim.home_ned
             self._send(self._telemetry.home_position())
         for name, interval in self._intervals.items():
             due = self._next_due.get(name, now)
@@ -430,6 +433,8 @@ class VehicleServer:
             home = self._telemetry.home_position()
             self._send(home)
             return ACCEPTED if home is not None else FAILED
+        if command == mavlink.MAV_CMD_SET_EKF_SOURCE_SET:
+            return sim.set_ekf_source_set(p[0])
         if command == mavlink.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN:
             if round(p[0]) != 1:
                 return UNSUPPORTED
@@ -438,7 +443,7 @@ class VehicleServer:
             # Ack first: a real autopilot acks, then goes quiet while it reboots.
             self._ack(msg, command, ACCEPTED)
             sim.reboot()
-            self._home_sent = False
+            self._home_sent = None
             return None
         return UNSUPPORTED
 
@@ -633,6 +638,13 @@ class VehicleServer:
                 position_valid=getattr(msg, "position_valid", 0),
             )
         )
+
+    def _on_vision_position(self, msg: mavlink.MAVLink_message) -> None:
+        # Any sender, no target fields: GCS_MAVLINK::handle_vision_position_estimate.
+        self.sim.vision_position(msg.x, msg.y, msg.z)
+
+    def _on_vision_speed(self, msg: mavlink.MAVLink_message) -> None:
+        self.sim.vision_speed()
 
     def _on_timesync(self, msg: mavlink.MAVLink_message) -> None:
         if msg.tc1 == 0:

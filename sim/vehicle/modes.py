@@ -18,7 +18,13 @@ from sim.vehicle.control import (
 )
 from sim.vehicle.params import ParamStore
 from sim.vehicle.physics import GRAVITY, Airframe, QuadBody
-from sim.vehicle.precland import PrecLand
+from sim.vehicle.precland import (
+    FAILSAFE,
+    HOLD_POS,
+    RETRYING,
+    PrecLand,
+    PrecLandStateMachine,
+)
 from sim.vehicle.state import Estimate, GuidedTarget
 
 # ArduCopter's mode numbers and names: the same table the GCS side knows
@@ -41,6 +47,9 @@ class FlightModes:
     airframe: Airframe
     body: QuadBody
     precland: PrecLand
+    _plnd_sm: PrecLandStateMachine
+    home_ned: tuple[float, float, float]
+    position_ok: bool
     mode: int
     armed: bool
     land_complete: bool
@@ -113,11 +122,11 @@ class FlightModes:
                 self.land_complete = False
                 poscon.reset(est.position_ned, (0.0, 0.0, 0.0))
             if taking_off:
-                alt = self._guided.alt
+                down = self.home_ned[2] - self._guided.alt
                 poscon.z.to_position(
-                    -alt, 0, p.get("PILOT_SPEED_UP") / 100, p.get("PSC_POSZ_P"), 1.0, dt
+                    down, 0, p.get("PILOT_SPEED_UP") / 100, p.get("PSC_POSZ_P"), 1.0, dt
                 )
-                if abs(poscon.z.pos + alt) < 0.05 or climb != 0:
+                if abs(poscon.z.pos - down) < 0.05 or climb != 0:
                     self._guided = GuidedTarget()
             else:
                 poscon.z.to_velocity(-climb, p.get("PILOT_ACCEL_Z") / 100.0, dt)
@@ -141,6 +150,9 @@ class FlightModes:
                 self._ground_idle(est)
                 return
             self._run_land(est, dt, speed_xy, xy_accel)
+            if not self.position_ok:
+                # Mode LAND without a position (nogps_run): level, pilot's lean only.
+                lean = (self._stick(1) * angle_max, self._stick(2) * angle_max)
         elif mode == RTL:
             if self.land_complete:
                 self._ground_idle(est)
@@ -216,10 +228,10 @@ class FlightModes:
         pz = p.get("PSC_POSZ_P")
         pxy = p.get("PSC_POSXY_P")
         if sub == "takeoff":
-            alt = g.alt
+            down = self.home_ned[2] - g.alt  # MAV_CMD_NAV_TAKEOFF's altitude is above home
             poscon.xy.to_velocity(0.0, 0.0, accel_xy, dt)
-            poscon.z.to_position(-alt, dn, up, pz, acc_z, dt)
-            if abs(poscon.z.pos + alt) < 0.01 and abs(poscon.z.vel) < 0.02:
+            poscon.z.to_position(down, dn, up, pz, acc_z, dt)
+            if abs(poscon.z.pos - down) < 0.01 and abs(poscon.z.vel) < 0.02:
                 self._guided = GuidedTarget()
         elif sub == "pos":
             poscon.xy.to_position(g.north, g.east, speed_xy, pxy, accel_xy, dt)
@@ -236,22 +248,30 @@ class FlightModes:
             poscon.z.to_velocity(0.0, acc_z, dt)
 
     def _land_descent(self, est: Estimate, precision: bool) -> float:
-        """Descent rate (m/s) as ModeLand / land_run_vertical_control computes it."""
+        """Descent rate (m/s) as Mode::land_run_vertical_control computes it: fast above
+        LAND_ALT_LOW, LAND_SPEED below; with a precision-landing target, no descent
+        while it is over PLND_XY_DIST_MAX away, and slower the farther it is while
+        the target's measured depth is between 0.35 and 2 m (not the rangefinder)."""
         p = self.params
         rf = self.rangefinder_m()
-        alt = rf if rf is not None else -est.position_ned[2]
+        alt = rf if rf is not None else self.home_ned[2] - est.position_ned[2]
         if alt > p.get("LAND_ALT_LOW") / 100.0:
             speed = (p.get("LAND_SPEED_HIGH") or p.get("WPNAV_SPEED_DN")) / 100.0
         else:
             speed = p.get("LAND_SPEED") / 100.0
-        if precision and rf is not None and 0.35 < rf < 2.0:
-            err = math.hypot(
-                self._poscon.xy.pos[0] - est.position_ned[0],
-                self._poscon.xy.pos[1] - est.position_ned[1],
+        pl = self.precland
+        if precision and pl.target_ne is not None:
+            err_cm = 100.0 * math.hypot(
+                pl.target_ne[0] - est.position_ned[0], pl.target_ne[1] - est.position_ned[1]
             )
-            max_desc = abs(p.get("LAND_SPEED")) * 0.5
-            slow = max(0.0, err * 100.0 * (max_desc / 15.0))
-            speed = max(10.0, max_desc - slow) / 100.0
+            max_err_cm = 100.0 * p.get("PLND_XY_DIST_MAX")
+            depth = pl.meas_down
+            if max_err_cm > 0 and err_cm > max_err_cm:
+                speed = 0.0
+            elif depth is not None and 0.35 < depth < 2.0:
+                max_desc = abs(p.get("LAND_SPEED")) * 0.5
+                slow = max(0.0, err_cm * (max_desc / 15.0))
+                speed = max(10.0, max_desc - slow) / 100.0
         return speed
 
     def _run_land_xy(self, est: Estimate, dt: float, speed_xy: float, accel_xy: float) -> bool:
@@ -273,10 +293,50 @@ class FlightModes:
         poscon.xy.to_velocity(fwd * cy - right * sy, fwd * sy + right * cy, accel_xy, dt)
         return False
 
-    def _run_land(self, est: Estimate, dt: float, speed_xy: float, accel_xy: float) -> None:
+    def _land_controllers(
+        self, est: Estimate, dt: float, speed_xy: float, accel_xy: float, pause: bool
+    ) -> None:
+        """Mode::run_land_controllers: horizontal hold or precision, vertical descent."""
         precision = self._run_land_xy(est, dt, speed_xy, accel_xy)
-        descent = self._land_descent(est, precision)
+        descent = 0.0 if pause else self._land_descent(est, precision)
         self._poscon.z.to_velocity(descent, self.params.get("WPNAV_ACCEL_Z") / 100.0, dt)
+
+    def _run_land_phase(self, est: Estimate, dt: float, speed_xy: float, accel_xy: float) -> None:
+        """Mode::land_run_normal_or_precland: with PLND_ENABLED the precision-landing
+        state machine decides (descend, retry elsewhere, or its failsafe hold)."""
+        p = self.params
+        pl = self.precland
+        if not pl.param_enabled:
+            self._land_controllers(est, dt, speed_xy, accel_xy, pause=False)
+            return
+        status, retry = self._plnd_sm.update(
+            pl,
+            self.time_s,
+            est.position_ned,
+            int(p.get("PLND_STRICT")),
+            p.get("PLND_TIMEOUT"),
+            int(p.get("PLND_RET_MAX")),
+            int(p.get("PLND_RET_BEHAVE")),
+        )
+        if status == RETRYING and retry is not None:
+            poscon = self._poscon
+            poscon.xy.to_position(retry[0], retry[1], speed_xy, p.get("PSC_POSXY_P"), accel_xy, dt)
+            poscon.z.to_position(
+                retry[2],
+                p.get("WPNAV_SPEED_DN") / 100.0,
+                p.get("WPNAV_SPEED_UP") / 100.0,
+                p.get("PSC_POSZ_P"),
+                p.get("WPNAV_ACCEL_Z") / 100.0,
+                dt,
+            )
+            return
+        hold = status == FAILSAFE and (
+            self._plnd_sm.failsafe_action(pl, self.time_s, int(p.get("PLND_STRICT"))) == HOLD_POS
+        )
+        self._land_controllers(est, dt, speed_xy, accel_xy, pause=hold)
+
+    def _run_land(self, est: Estimate, dt: float, speed_xy: float, accel_xy: float) -> None:
+        self._run_land_phase(est, dt, speed_xy, accel_xy)
         self._yaw_t = wrap_pi(
             self._yaw_t + self._stick(4) * math.radians(self.params.get("PILOT_Y_RATE")) * dt
         )
@@ -289,35 +349,37 @@ class FlightModes:
         dn = p.get("WPNAV_SPEED_DN") / 100.0
         speed = (p.get("RTL_SPEED") / 100.0) or speed_xy
         state = self._rtl_state
-        alt_now = -est.position_ned[2]
+        hn, he, hd = self.home_ned  # RTL returns to home (where it armed), not the origin
+        alt_now = hd - est.position_ned[2]
         if state == "climb":
             target_alt = max(p.get("RTL_ALT") / 100.0, alt_now + p.get("RTL_CLIMB_MIN") / 100.0)
             self._rtl_alt = target_alt
             self._rtl_state = state = "return"
         if state == "return":
             target_alt = self._rtl_alt
-            poscon.z.to_position(-target_alt, dn, up, p.get("PSC_POSZ_P"), acc_z, dt)
-            climbed = alt_now > target_alt - 1.0 or abs(poscon.z.pos + target_alt) < 0.5
+            poscon.z.to_position(hd - target_alt, dn, up, p.get("PSC_POSZ_P"), acc_z, dt)
+            climbed = alt_now > target_alt - 1.0 or abs(poscon.z.pos - (hd - target_alt)) < 0.5
             if climbed:
-                poscon.xy.to_position(0.0, 0.0, speed, p.get("PSC_POSXY_P"), accel_xy, dt)
+                poscon.xy.to_position(hn, he, speed, p.get("PSC_POSXY_P"), accel_xy, dt)
             else:
                 poscon.xy.to_velocity(0.0, 0.0, accel_xy, dt)
-            if math.hypot(*poscon.xy.pos) < 0.05 and math.hypot(*poscon.xy.vel) < 0.05:
+            near = math.hypot(poscon.xy.pos[0] - hn, poscon.xy.pos[1] - he) < 0.05
+            if near and math.hypot(*poscon.xy.vel) < 0.05:
                 self._rtl_state = "loiter"
                 self._rtl_t = self.time_s
         elif state == "loiter":
-            poscon.xy.to_position(0.0, 0.0, speed, p.get("PSC_POSXY_P"), accel_xy, dt)
+            poscon.xy.to_position(hn, he, speed, p.get("PSC_POSXY_P"), accel_xy, dt)
             poscon.z.to_velocity(0.0, acc_z, dt)
             if self.time_s - self._rtl_t >= p.get("RTL_LOIT_TIME") / 1000.0:
                 final = p.get("RTL_ALT_FINAL") / 100.0
                 self._rtl_state = "final" if final > 0 else "land"
+                self._plnd_sm.init()
         elif state == "final":
             final = p.get("RTL_ALT_FINAL") / 100.0
-            poscon.xy.to_position(0.0, 0.0, speed, p.get("PSC_POSXY_P"), accel_xy, dt)
-            poscon.z.to_position(-final, dn, up, p.get("PSC_POSZ_P"), acc_z, dt)
+            poscon.xy.to_position(hn, he, speed, p.get("PSC_POSXY_P"), accel_xy, dt)
+            poscon.z.to_position(hd - final, dn, up, p.get("PSC_POSZ_P"), acc_z, dt)
         else:  # land, as LAND mode does (precision landing included)
-            precision = self._run_land_xy(est, dt, speed_xy, accel_xy)
-            poscon.z.to_velocity(self._land_descent(est, precision), acc_z, dt)
+            self._run_land_phase(est, dt, speed_xy, accel_xy)
 
     @property
     def rtl_state(self) -> str | None:

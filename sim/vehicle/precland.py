@@ -10,6 +10,17 @@ more than 0.5 s apart ("PrecLand: Target Found", then "PrecLand: Init Complete",
 PLND_LAG seconds before it is processed. The estimate is kept in the NED frame of the
 position estimate as the target's absolute position (a static target), which is what
 ArduPilot's relative estimate plus inertial prediction amounts to.
+
+The backend exists only if PLND_TYPE was 1 at boot; PLND_ENABLED acts at once. LAND
+consults :class:`PrecLandStateMachine` whenever PLND_ENABLED is 1, backend or not
+(AC_PrecLand_StateMachine, ArduPilot 4.5): a target never seen means FAILSAFE
+("PrecLand: Failsafe Measures", hold 7 s with PLND_STRICT = 1, then descend); a
+target state of "out of range" (no healthy rangefinder while PLND_ALT_MIN/MAX are
+set, SITL's default) means descend; a target lost within range means descend for
+PLND_TIMEOUT, then retry from above the last sighting ("PrecLand: Retrying"). On
+genuine SITL without a rangefinder: no backend (PLND_TYPE set without a reboot)
+gives the failsafe stop, a backend with no targets descends silently, and targets
+that stop give "PrecLand: Target Lost" and a descent.
 """
 
 from __future__ import annotations
@@ -22,6 +33,11 @@ from sim.vehicle.physics import Quat, Vec3, body_to_ned
 
 MEAS_STALE_S = 1.0
 TARGET_TIMEOUT_S = 2.0
+TARGET_LOST_TIMEOUT_S = 180.0  # a target lost longer than this counts as never seen
+TARGET_LOST_DIST_M = 30.0
+FAILSAFE_HOLD_S = 7.0  # FAILSAFE_INIT_TIMEOUT_MS
+RETRY_CLIMB_M = 1.5  # RETRY_OFFSET_ALT_M
+RETRY_REACHED_M = 0.75  # MAX_POS_ERROR_M
 KF_INIT_TIME_S = 2.0
 KF_INIT_MIN_UPDATE_S = 0.5
 MAV_FRAME_BODY_FRD = 12
@@ -78,11 +94,24 @@ class _AxisKF:
         ]
 
 
-class PrecLand:
-    """Target estimator; ``texts`` collects STATUSTEXTs (severity, text) to send."""
+# AC_PrecLand::TargetState
+NEVER_SEEN, FOUND, RECENTLY_LOST, OUT_OF_RANGE = (
+    "never_seen",
+    "found",
+    "recently_lost",
+    "out_of_range",
+)
 
-    def __init__(self, enabled: bool, est_type: int) -> None:
-        self.enabled = enabled
+
+class PrecLand:
+    """Target estimator; ``texts`` collects STATUSTEXTs (severity, text) to send.
+
+    ``backend``: PLND_TYPE was 1 at boot; ``param_enabled``: PLND_ENABLED now.
+    """
+
+    def __init__(self, backend: bool, param_enabled: bool, est_type: int) -> None:
+        self.backend = backend
+        self.param_enabled = param_enabled
         self.est_type = est_type
         self.texts: list[tuple[int, str]] = []
         self._meas: tuple[float, Vec3, float] | None = None  # (t, los body, distance)
@@ -98,6 +127,16 @@ class PrecLand:
         self._clock_offset: deque[float] = deque(maxlen=50)
         self.target_ne: tuple[float, float] | None = None  # last estimate, NE (m)
         self.measurements = 0
+        self.state = NEVER_SEEN
+        self.meas_down: float | None = None  # the last measurement's depth of the target (m)
+        self.last_valid_t: float | None = None
+        self.last_target_ne: tuple[float, float] | None = None
+        self.last_vehicle_ned: Vec3 | None = None
+
+    @property
+    def enabled(self) -> bool:
+        """The estimator runs: a backend exists and PLND_ENABLED is 1."""
+        return self.backend and self.param_enabled
 
     # -- input ---------------------------------------------------------------------
     def handle_landing_target(self, msg: LandingTargetMsg, now: float) -> None:
@@ -153,8 +192,42 @@ class PrecLand:
             rel = self._relative_ned(meas[1], meas[2], delayed_quat, rangefinder_m, cam_offset)
             if rel is not None:
                 tn, te = delayed_pos[0] + rel[0], delayed_pos[1] + rel[1]
+                self.meas_down = rel[2]
                 self._fuse(now, tn, te, rel[2])
         self._check_timeouts(now)
+        if self.acquired and self.target_ne is not None:
+            self.last_valid_t = now
+            self.last_target_ne = self.target_ne
+            self.last_vehicle_ned = delayed_pos
+
+    def check_target_status(
+        self,
+        now: float,
+        vehicle_ned: Vec3,
+        rangefinder_m: float | None,
+        alt_min: float,
+        alt_max: float,
+    ) -> None:
+        """AC_PrecLand::check_target_status (runs only with a backend)."""
+        if not self.backend:
+            return
+        if self.acquired:
+            self.state = FOUND
+            return
+        self.state = RECENTLY_LOST if self.state in (FOUND, RECENTLY_LOST) else NEVER_SEEN
+        if not _sensor_in_range(rangefinder_m, alt_min, alt_max):
+            self.state = OUT_OF_RANGE
+            return
+        if self.state == RECENTLY_LOST and self.last_valid_t is not None:
+            far = self.last_target_ne is not None and (
+                math.dist(vehicle_ned[:2], self.last_target_ne) > TARGET_LOST_DIST_M
+                or (
+                    self.last_vehicle_ned is not None
+                    and math.dist(vehicle_ned[:2], self.last_vehicle_ned[:2]) > TARGET_LOST_DIST_M
+                )
+            )
+            if now - self.last_valid_t > TARGET_LOST_TIMEOUT_S or far:
+                self.state = NEVER_SEEN
 
     def _relative_ned(
         self, los: Vec3, dist: float, q: Quat, rangefinder_m: float | None, cam: Vec3
@@ -233,3 +306,109 @@ class PrecLand:
     def measurement_fresh(self, now: float) -> bool:
         """A measurement was fused within the last second."""
         return now - self._last_update_t <= MEAS_STALE_S
+
+
+def _sensor_in_range(rangefinder_m: float | None, alt_min: float, alt_max: float) -> bool:
+    """AC_PrecLand::check_if_sensor_in_range: needs a rangefinder once limits are set."""
+    if alt_min == 0 and alt_max == 0:
+        return True
+    if rangefinder_m is None:
+        return False
+    if alt_max != 0 and rangefinder_m > alt_max:
+        return False
+    return not (alt_min != 0 and rangefinder_m < alt_min)
+
+
+# AC_PrecLand_StateMachine::Status and FailSafeAction
+DESCEND, RETRYING, FAILSAFE = "descend", "retrying", "failsafe"
+HOLD_POS = "hold_pos"
+
+
+class PrecLandStateMachine:
+    """What LAND does with precision landing enabled (AC_PrecLand_StateMachine).
+
+    ``init`` at every mode change; ``update`` each loop gives the status and, while
+    retrying, the position (NED, m) to fly to; ``failsafe_action`` the hold/descend.
+    """
+
+    def __init__(self) -> None:
+        self.init()
+
+    def init(self) -> None:
+        self.retry_count = 0
+        self._reset()
+
+    def _reset(self) -> None:
+        self._lost_action = "init"
+        self._retry_state = "init"
+        self._failsafe_started: float | None = None
+
+    def update(
+        self,
+        pl: PrecLand,
+        now: float,
+        vehicle_ned: Vec3,
+        strict: int,
+        timeout_s: float,
+        retry_max: int,
+        retry_behave: int,
+    ) -> tuple[str, Vec3 | None]:
+        state = pl.state
+        if state == NEVER_SEEN:
+            return FAILSAFE, None
+        if state in (FOUND, OUT_OF_RANGE):
+            self._reset()
+            return DESCEND, None
+        # recently lost
+        if self._lost_action == "init":
+            self._lost_action = "land_vertically" if strict == 0 else "descend"
+            return DESCEND, None
+        if self._lost_action == "descend":
+            if pl.last_valid_t is not None and now - pl.last_valid_t >= timeout_s:
+                self._lost_action = "retry"
+                self._retry_state = "init"
+            return DESCEND, None
+        if self._lost_action == "land_vertically":
+            return DESCEND, None
+        return self._retry(pl, vehicle_ned, retry_max, retry_behave)
+
+    def _retry(
+        self, pl: PrecLand, vehicle_ned: Vec3, retry_max: int, retry_behave: int
+    ) -> tuple[str, Vec3 | None]:
+        if retry_max == 0 or self.retry_count > retry_max:
+            return FAILSAFE, None
+        if retry_behave == 1 and pl.last_target_ne is not None and pl.last_vehicle_ned is not None:
+            base: Vec3 = (*pl.last_target_ne, pl.last_vehicle_ned[2])
+        elif pl.last_vehicle_ned is not None:
+            base = pl.last_vehicle_ned
+        else:
+            return FAILSAFE, None
+        go_to = (base[0], base[1], base[2] - RETRY_CLIMB_M)
+        if self._retry_state == "init":
+            self.retry_count += 1
+            self._retry_state = "in_progress"
+            if self.retry_count <= retry_max:
+                pl.texts.append((6, "PrecLand: Retrying"))
+            return RETRYING, go_to
+        if self._retry_state == "in_progress":
+            if math.dist(go_to, vehicle_ned) < RETRY_REACHED_M:
+                self._retry_state = "descend"
+            return RETRYING, go_to
+        if self._retry_state == "descend":
+            target = (vehicle_ned[0], vehicle_ned[1], base[2])
+            if abs(vehicle_ned[2] - target[2]) < RETRY_REACHED_M:
+                self._retry_state = "complete"
+                pl.texts.append((6, "PrecLand: Retry Completed"))
+            return RETRYING, target
+        return FAILSAFE, None
+
+    def failsafe_action(self, pl: PrecLand, now: float, strict: int) -> str:
+        """HOLD_POS or DESCEND; announces "PrecLand: Failsafe Measures" once."""
+        if self._failsafe_started is None:
+            self._failsafe_started = now
+            pl.texts.append((6, "PrecLand: Failsafe Measures"))
+        if strict == 2:
+            return HOLD_POS
+        if strict == 1 and now - self._failsafe_started < FAILSAFE_HOLD_S:
+            return HOLD_POS
+        return DESCEND

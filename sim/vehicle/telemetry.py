@@ -9,7 +9,7 @@ from collections.abc import Callable
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from sim.vehicle.autopilot import SimVehicle
-from sim.vehicle.physics import quat_from_euler
+from sim.vehicle.physics import GRAVITY, euler_from_quat, ned_to_body
 
 MAVLinkMessage = mavlink.MAVLink_message
 
@@ -88,6 +88,8 @@ class TelemetryBuilder:
             "SERVO_OUTPUT_RAW": self.servo_output_raw,
             "HOME_POSITION": self.home_position,
             "AUTOPILOT_VERSION": self.autopilot_version,
+            "SIM_STATE": self.sim_state,
+            "GPS_GLOBAL_ORIGIN": self.gps_global_origin,
         }
 
     @property
@@ -125,7 +127,10 @@ class TelemetryBuilder:
 
     def sys_status(self) -> MAVLinkMessage:
         sim = self.sim
-        health = _SENSORS
+        present = _SENSORS
+        if sim.params.get("RNGFND1_TYPE") == 0:
+            present &= ~mavlink.MAV_SYS_STATUS_SENSOR_LASER_POSITION
+        health = present
         if not sim.gps_fix:
             health &= ~mavlink.MAV_SYS_STATUS_SENSOR_GPS
         if sim.boot_s < sim._t(4.0):
@@ -135,8 +140,8 @@ class TelemetryBuilder:
         if not (sim.armed or sim.prearm_ok):
             health &= ~mavlink.MAV_SYS_STATUS_PREARM_CHECK
         return self.mav.sys_status_encode(
-            _SENSORS,
-            _SENSORS,
+            present,
+            present,
             health,
             150,
             round(sim.battery_voltage * 1000),
@@ -202,7 +207,7 @@ class TelemetryBuilder:
             round(lat * 1e7),
             round(lon * 1e7),
             round(alt * 1000),
-            round(-d * 1000),
+            round((sim.home_ned[2] - d) * 1000),  # relative to home, which moves on arming
             round(vn * 100),
             round(ve * 100),
             round(vd * 100),
@@ -211,7 +216,9 @@ class TelemetryBuilder:
 
     def local_position_ned(self) -> MAVLinkMessage | None:
         sim = self.sim
-        if not sim.origin_set:
+        # ArduPilot sends it only while the EKF has a horizontal position (GPS ~41.5 s
+        # after boot, or ExternalNav), not from the origin being set.
+        if not sim.position_ok:
             return None
         est = sim.estimate
         n, e, d = est.position_ned
@@ -241,14 +248,18 @@ class TelemetryBuilder:
         unix_us = 1_763_800_000_000_000 + round(sim.time_s * 1e6) if sim.gps_fix else 0
         return self.mav.system_time_encode(unix_us, sim.time_boot_ms)
 
-    def rangefinder(self) -> MAVLinkMessage:
+    def rangefinder(self) -> MAVLinkMessage | None:
+        if self.sim.params.get("RNGFND1_TYPE") == 0:
+            return None  # no rangefinder, no message
         dist = self.sim.rangefinder_m()
         d = 0.0 if dist is None else dist + self._rng.gauss() * 0.01
         return self.mav.rangefinder_encode(max(0.0, d), max(0.0, d) / 10.0)
 
-    def distance_sensor(self) -> MAVLinkMessage:
+    def distance_sensor(self) -> MAVLinkMessage | None:
         sim = self.sim
         p = sim.params
+        if p.get("RNGFND1_TYPE") == 0:
+            return None
         dist = sim.rangefinder_m()
         max_cm = int(p.get("RNGFND1_MAX_CM"))
         cm = max_cm + 1 if dist is None else round((dist + self._rng.gauss() * 0.01) * 100)
@@ -318,15 +329,16 @@ class TelemetryBuilder:
         sim = self.sim
         if not sim.home_set:
             return None
-        c = sim.config
+        n, e, d = sim.home_ned
+        lat, lon, alt = sim.ned_to_global(n, e, d)
         return self.mav.home_position_encode(
-            round(c.home_lat * 1e7),
-            round(c.home_lon * 1e7),
-            round(c.home_alt * 1000),
-            0.0,
-            0.0,
-            0.0,
-            quat_from_euler(0.0, 0.0, 0.0),
+            round(lat * 1e7),
+            round(lon * 1e7),
+            round(alt * 1000),
+            n,
+            e,
+            d,
+            (1.0, 0.0, 0.0, 0.0),
             0.0,
             0.0,
             0.0,
@@ -346,4 +358,52 @@ class TelemetryBuilder:
             0x1209,
             0x5740,
             0,
+        )
+
+    def sim_state(self) -> MAVLinkMessage:
+        """The simulator's truth, filled in as ArduPilot SITL does (lat/lon in degE7,
+        also in the float fields; alt AMSL; accelerations in the body frame)."""
+        sim = self.sim
+        b = sim.body
+        roll, pitch, yaw = euler_from_quat(b.quat)
+        lat, lon, alt = sim.ned_to_global(*b.pos)
+        acc = ned_to_body(b.quat, (b.accel[0], b.accel[1], b.accel[2] - GRAVITY))
+        q = b.quat
+        return self.mav.sim_state_encode(
+            q[0],
+            q[1],
+            q[2],
+            q[3],
+            roll,
+            pitch,
+            yaw,
+            acc[0],
+            acc[1],
+            acc[2],
+            b.rates[0],
+            b.rates[1],
+            b.rates[2],
+            lat * 1e7,
+            lon * 1e7,
+            alt,
+            0.0,
+            0.0,
+            b.vel[0],
+            b.vel[1],
+            b.vel[2],
+            round(lat * 1e7),
+            round(lon * 1e7),
+        )
+
+    def gps_global_origin(self) -> MAVLinkMessage | None:
+        """The EKF origin (where the vehicle booted), once set."""
+        sim = self.sim
+        if not sim.origin_set:
+            return None
+        c = sim.config
+        return self.mav.gps_global_origin_encode(
+            round(c.home_lat * 1e7),
+            round(c.home_lon * 1e7),
+            round(c.home_alt * 1000),
+            round(sim.boot_s * 1e6),
         )
