@@ -43,6 +43,13 @@ class CommandResult(Model):
     elapsed_s: float = 0.0
 
 
+class ViewSession(Model):
+    """Whether this browser holds a view cookie now (``POST``/``DELETE /api/session``)."""
+
+    view_cookie: bool
+    detail: str
+
+
 class Health(Model):
     ok: bool
     version: str
@@ -323,6 +330,19 @@ class PipelineStatus(Model):
     last_error: str
 
 
+class Rejected(Model):
+    """What the station refused at its edge since it started (counted, never a crash)."""
+
+    requests: int = Field(
+        description="HTTP requests refused for their Host, Origin or site, or a token in the URL"
+    )
+    sockets: int = Field(
+        description="WebSockets refused or closed: Host, Origin, a missing or wrong token, "
+        "garbage messages"
+    )
+    last_reason: str
+
+
 class Status(Model):
     """Link, camera, pipeline, mission, reference, flight and 3D view, in one snapshot."""
 
@@ -332,7 +352,10 @@ class Status(Model):
     mission: MissionSnapshot | None
     reference: ReferenceSummary | None
     flight: FlightRef | None
-    viser_url: str | None
+    viser_url: str | None = Field(
+        description="where the dashboard finds the 3D view (a path on this station)"
+    )
+    rejected: Rejected
 
 
 class PublicSettings(Model):
