@@ -46,7 +46,9 @@ async def upload_reference(
     references: ReferencesDep,
     runtime: RuntimeDep,
     file: Annotated[UploadFile, File(description="a top-down picture of the pad")],
-    pad_size_m: Annotated[float, Form(gt=0, le=MAX_PAD_SIZE_M, description="pad width, m")],
+    pad_size_m: Annotated[
+        float, Form(gt=0, le=MAX_PAD_SIZE_M, allow_inf_nan=False, description="pad width, m")
+    ],
 ) -> dict[str, Any]:
     """Measure the H on the picture and make it the active reference.
 

@@ -138,7 +138,14 @@ def test_nothing_reaches_the_vehicle_without_the_token(client):
     [
         ("/api/vehicle/takeoff", "{not json", ["not valid JSON"]),
         ("/api/vehicle/takeoff", '{"altitude_m": "high"}', ["altitude_m", "number"]),
-        ("/api/vehicle/takeoff", '{"altitude_m": -2}', ["altitude_m", "greater than 0"]),
+        ("/api/vehicle/takeoff", '{"altitude_m": -2}', ["altitude_m", "greater than or equal to 1"]),
+        ("/api/vehicle/takeoff", '{"altitude_m": 1e-300}', ["altitude_m", "greater than or equal"]),
+        # Strict: a boolean or a string is not a number, and nothing is not finite.
+        ("/api/vehicle/takeoff", '{"altitude_m": true}', ["altitude_m", "number"]),
+        ("/api/vehicle/takeoff", '{"altitude_m": "5"}', ["altitude_m", "number"]),
+        ("/api/vehicle/takeoff", '{"altitude_m": NaN}', ["altitude_m", "finite"]),
+        ("/api/vehicle/takeoff", '{"altitude_m": 1e400}', ["altitude_m", "finite"]),
+        ("/api/vehicle/mode", '{"mode": "\\ud800"}', ["mode", "string"]),
         ("/api/vehicle/takeoff", '{"altitude_m": 500}', ["altitude_m", "less than"]),
         ("/api/vehicle/takeoff", "{}", ["altitude_m", "required"]),
         ("/api/vehicle/takeoff", "", ["body"]),
@@ -152,6 +159,14 @@ def test_nothing_reaches_the_vehicle_without_the_token(client):
 def test_bad_command_input_is_422_with_a_sentence(client, path, body, words):
     r = client.post(path, content=body, headers={**AUTH, "Content-Type": "application/json"})
     assert_sentence(r, 422, *words)
+
+
+@pytest.mark.parametrize("body", ["{not json", '{"altitude_m": true}', "[" * 5000, ""])
+def test_without_the_token_a_body_is_not_even_read(client, body):
+    r = client.post(
+        "/api/vehicle/takeoff", content=body, headers={"Content-Type": "application/json"}
+    )
+    assert_sentence(r, 401, "token")
 
 
 @pytest.mark.parametrize(

@@ -50,6 +50,12 @@ def test_nothing_to_abort_is_a_conflict(client):
         ("/api/missions/land", {"approach_alt_m": -2}, "approach_alt_m"),
         ("/api/missions/land", {"surprise": 1}, "surprise"),
         ("/api/missions/hover", {"altitude_m": 500}, "altitude_m"),
+        # The cases: a tiny height is no height, a boolean is not a number.
+        ("/api/missions/hover", {"altitude_m": 1e-300}, "altitude_m"),
+        ("/api/missions/hover", {"altitude_m": True}, "altitude_m"),
+        ("/api/missions/hover", {"hold_s": "20"}, "hold_s"),
+        ("/api/missions/land", {"approach_alt_m": 0.5}, "approach_alt_m"),
+        ("/api/missions/land", {"search_s": None}, "search_s"),
         ("/api/missions/hover", {"abort_mode": "LAND"}, "abort_mode"),
     ],
 )
