@@ -139,6 +139,8 @@ class Telemetry(Model):
     heartbeat_age_s: float | None
     packets_lost_pct: float | None
     handler_errors: int
+    implausible: int = Field(description="messages dropped: their values cannot be real")
+    last_implausible: str | None
     reconnects: int
     last_error: str | None
     attitude_time_boot_ms: int | None
@@ -309,6 +311,9 @@ class LinkStatus(Model):
     heartbeat_age_s: float | None
     msgs_per_s: float | None
     crc_errors: int
+    implausible: int = Field(
+        description="telemetry messages dropped because their values cannot be real"
+    )
 
 
 class CameraStatus(Model):
@@ -365,6 +370,7 @@ class PublicSettings(Model):
     record_frames: bool
     jpeg_quality: int
     max_upload_bytes: int
+    max_upload_pixels: int
     camera: str
     mavlink: str
     pad_size_m: float

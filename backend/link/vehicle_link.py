@@ -153,6 +153,7 @@ class VehicleLink(LinkCommands, LinkReceiver, LinkHousekeeping):
         self._last_hb: float | None = None
         self._rx_count = 0
         self._handler_errors = 0
+        self._implausible = 0
         self._last_error: str | None = None
 
         self._streams = streams.StreamRequester()

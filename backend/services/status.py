@@ -150,6 +150,7 @@ class StatusService:
                 "heartbeat_age_s": tel.heartbeat_age_s,
                 "msgs_per_s": tel.msgs_per_s,
                 "crc_errors": tel.crc_errors,
+                "implausible": tel.implausible,
             },
             "camera": {
                 "name": self._source.name,
