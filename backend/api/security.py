@@ -7,8 +7,8 @@ Every HTTP request and WebSocket on the main port passes :class:`StationGuard` f
   127.0.0.1, gets 400.
 - **Origin**: a browser says which page made the request; only the station's own
   origin (the scheme and Host of the request itself) and ``allowed_origins`` pass,
-  anything else (another site, another port on localhost, ``null``) gets 403, and a
-  WebSocket is refused before it opens.
+  anything else (another site, another port on localhost, ``null``) gets 403.
+- A WebSocket refused for any of these is refused before it opens (HTTP 403).
 - **Site** (fetch metadata): a request a browser made for another site's page (an
   ``<img>``, a ``<script>``, a frame) gets 403 even without an Origin header; only a
   top-level navigation to a page (not ``/api``) may come from elsewhere.
@@ -244,7 +244,7 @@ class StationGuard:
             if kind == "http":
                 await _json_answer(send, status, problem, bearer=status == 401)
             else:
-                await _refuse_websocket(scope, send, status, problem)
+                await _refuse_websocket(send, problem)
             return
         if kind == "websocket":
             await self.app(scope, receive, send)
@@ -288,24 +288,13 @@ async def _json_answer(send: Send, status: int, detail: str, *, bearer: bool = F
     await send({"type": "http.response.body", "body": body})
 
 
-async def _refuse_websocket(scope: Scope, send: Send, status: int, detail: str) -> None:
-    """Refuse a WebSocket before it opens: an HTTP answer with the sentence where the
-    server can send one, else a plain close (which the server turns into 403)."""
-    if "websocket.http.response" in scope.get("extensions", {}):
-        body = json.dumps({"detail": detail}).encode()
-        await send(
-            {
-                "type": "websocket.http.response.start",
-                "status": status,
-                "headers": [
-                    (b"content-type", b"application/json"),
-                    (b"content-length", str(len(body)).encode()),
-                ],
-            }
-        )
-        await send({"type": "websocket.http.response.body", "body": body})
-    else:
-        await send({"type": "websocket.close", "code": 1008, "reason": detail[:120]})
+async def _refuse_websocket(send: Send, detail: str) -> None:
+    """Refuse a WebSocket before it opens: the server answers the upgrade with 403.
+
+    (An HTTP answer with the sentence would be nicer, but uvicorn logs an error for
+    every such refusal, and browsers do not show it to the page anyway.)
+    """
+    await send({"type": "websocket.close", "code": 1008, "reason": detail[:120]})
 
 
 # --- the logs -------------------------------------------------------------------------------

@@ -29,8 +29,6 @@ log = logging.getLogger(__name__)
 #: viser's scene messages (meshes, the pad's picture) can be large.
 MAX_MESSAGE_BYTES = 50 * 1024 * 1024
 CONNECT_TIMEOUT_S = 5.0
-CLOSE_OFF = 4404
-CLOSE_UNAUTHORIZED = 4401
 _page_cache: dict[Path, bytes] = {}
 
 
@@ -79,11 +77,12 @@ async def proxy(ws: WebSocket) -> None:
     viewer = _viewer(ws.app)
     port = None if viewer is None else viewer.bound_port
     if station is None or viewer is None or port is None:
-        await ws.close(CLOSE_OFF, "The 3D view is off on this station.")
+        await ws.close(1008, "The 3D view is off on this station.")  # refused: HTTP 403
         return
     if station.runtime.view_requires_token and not view_cookie_ok(ws):
         station.rejections.socket("3D view without the view cookie")
-        await ws.close(CLOSE_UNAUTHORIZED, "Viewing needs the operator token: sign in first.")
+        # Refused before it opens (HTTP 403): the cookie is known at the handshake.
+        await ws.close(1008, "Viewing needs the operator token: sign in first.")
         return
     offered = [p for p in ws.scope.get("subprotocols", []) if p.startswith("viser-v")][:1]
     try:
