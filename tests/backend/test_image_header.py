@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import random
 
 import cv2
@@ -67,22 +68,16 @@ def test_every_prefix_and_mutant_of_a_picture_is_a_header_or_bad_header():
     for fmt in FORMATS:
         data = valid(fmt, rng)
         for end in range(len(data) + 1):
-            try:
+            with contextlib.suppress(BadHeader):
                 read_header(data[:end])
-            except BadHeader:
-                pass
         for _ in range(50):
             for mutant in mutants(data, rng):
-                try:
+                with contextlib.suppress(UnsupportedImage, TooManyPixels):
                     decode_image(mutant)
-                except (UnsupportedImage, TooManyPixels):
-                    pass
 
 
 def test_random_uploads_never_raise_anything_else():
     rng = random.Random(11)
     for _ in range(500):
-        try:
+        with contextlib.suppress(UnsupportedImage, TooManyPixels):
             decode_image(random_upload(rng))
-        except (UnsupportedImage, TooManyPixels):
-            pass

@@ -138,7 +138,7 @@ def test_nothing_reaches_the_vehicle_without_the_token(client):
     [
         ("/api/vehicle/takeoff", "{not json", ["not valid JSON"]),
         ("/api/vehicle/takeoff", '{"altitude_m": "high"}', ["altitude_m", "number"]),
-        ("/api/vehicle/takeoff", '{"altitude_m": -2}', ["altitude_m", "greater than or equal to 1"]),
+        ("/api/vehicle/takeoff", '{"altitude_m": -2}', ["altitude_m", "greater than or equal"]),
         ("/api/vehicle/takeoff", '{"altitude_m": 1e-300}', ["altitude_m", "greater than or equal"]),
         # Strict: a boolean or a string is not a number, and nothing is not finite.
         ("/api/vehicle/takeoff", '{"altitude_m": true}', ["altitude_m", "number"]),
