@@ -37,7 +37,9 @@ def test_an_open_flight_keeps_its_frames_and_gets_its_tlog(tmp_path):
     tlogs.mkdir()
     mav = mavlink2.MAVLink(None, 1, 1)
     (tlogs / "session.tlog").write_bytes(
-        tlog_record(started - 30, mav) + tlog_record(started + 5, mav) + tlog_record(started + 9, mav)
+        tlog_record(started - 30, mav)
+        + tlog_record(started + 5, mav)
+        + tlog_record(started + 9, mav)
     )
     events = []
 
