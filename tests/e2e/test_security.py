@@ -10,8 +10,8 @@ WebSocket, pictures, frames, the 3D view and its own port.
 
 from __future__ import annotations
 
+import contextlib
 import http.server
-import json
 import os
 import signal
 import socket
@@ -86,9 +86,20 @@ def station(tmp_path_factory) -> Iterator[Served]:
     }
     with log.open("wb") as out:
         proc = subprocess.Popen(
-            [sys.executable, "-m", "backend", "serve", "--port", str(port)]
-            + ["--viser-port", str(viser_port), "--data-dir", str(tmp / "data")]
-            + ["--log-level", "info"],
+            [
+                sys.executable,
+                "-m",
+                "backend",
+                "serve",
+                "--port",
+                str(port),
+                "--viser-port",
+                str(viser_port),
+                "--data-dir",
+                str(tmp / "data"),
+                "--log-level",
+                "info",
+            ],
             cwd=ROOT,
             env=env,
             stdout=out,
@@ -133,10 +144,9 @@ def test_the_token_is_in_no_url_response_or_log_line(browser, station: Served) -
     def keep_body(response) -> None:
         kind = response.headers.get("content-type", "")
         if "json" in kind or "html" in kind or "javascript" in kind or "text" in kind:
-            try:
+            # a response the page dropped (a navigation) has nothing to read
+            with contextlib.suppress(Exception):
                 bodies.append(response.text())
-            except Exception:  # a response the page dropped (navigation): nothing to read
-                pass
 
     page.on("response", keep_body)
     page.on("websocket", lambda s: sockets.append(s))
@@ -227,7 +237,7 @@ def test_a_page_at_another_origin_gets_nothing(browser, station: Served) -> None
     ).encode()
 
     class Evil(http.server.BaseHTTPRequestHandler):
-        def do_GET(self) -> None:  # noqa: N802 (http.server's name)
+        def do_GET(self) -> None:
             self.send_response(200)
             self.send_header("Content-Type", "text/html")
             self.send_header("Content-Length", str(len(html)))
@@ -246,8 +256,7 @@ def test_a_page_at_another_origin_gets_nothing(browser, station: Served) -> None
         # "localhost" is another origin than 127.0.0.1 (and another port): another site
         page.goto(f"http://localhost:{evil.server_address[1]}/")
         page.wait_for_function(
-            "['fetch','nocors','ws','view3d','viserport','img']"
-            ".every(k => k in window.results)",
+            "['fetch','nocors','ws','view3d','viserport','img'].every(k => k in window.results)",
             timeout=30_000,
         )
         results = page.evaluate("window.results")
