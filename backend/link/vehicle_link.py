@@ -246,6 +246,11 @@ class VehicleLink(LinkCommands, LinkReceiver, LinkHousekeeping):
         """The link state now."""
         return self._state
 
+    def flush_tlog(self) -> None:
+        """Push the session's .tlog to disk now (the link flushes it every second too)."""
+        if self._tlog is not None:
+            self._tlog.flush()
+
     @property
     def tlog_path(self) -> Path | None:
         """The session's .tlog, or None without ``tlog_dir`` (or before ``start``)."""

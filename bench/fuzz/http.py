@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import faulthandler
 import json
 import random
 import tempfile
@@ -115,13 +116,19 @@ def run_uploads(n: int, seed: int) -> dict[str, Any]:
     ):
         bombs = measure_bombs(client)
         for _ in range(n):
-            r = _upload(client, random_upload(rng), rng.choice(_PAD_SIZES))
+            try:
+                r = _upload(client, random_upload(rng), rng.choice(_PAD_SIZES))
+            except httpx.TimeoutException:
+                codes[0] += 1  # no answer in a minute: a hang, shown with every thread's stack
+                faulthandler.dump_traceback(all_threads=True)
+                continue
             codes[r.status_code] += 1
         alive = client.get("/api/health").status_code == 200
     return {
         "inputs": n,
         "status_counts": {str(k): v for k, v in sorted(codes.items())},
         "status_5xx": sum(v for k, v in codes.items() if k >= 500),
+        "no_answer": codes.get(0, 0),
         "unhandled_exceptions": watch.count,
         "samples": watch.samples,
         "server_alive": alive,

@@ -49,6 +49,7 @@ def fuzz(n: int, *, kinds: Iterable[str] = KINDS, seed: int = 0) -> dict[str, An
         out[kind] = run(n, seed)
     out["unhandled_exceptions"] = sum(out[k]["unhandled_exceptions"] for k in kinds)
     out["status_5xx"] = sum(out[k].get("status_5xx", 0) for k in kinds)
-    out["bars_met"] = out["unhandled_exceptions"] == 0 and out["status_5xx"] == 0
+    out["no_answer"] = sum(out[k].get("no_answer", 0) for k in kinds)
+    out["bars_met"] = not (out["unhandled_exceptions"] or out["status_5xx"] or out["no_answer"])
     out["wall_s"] = round(time.perf_counter() - t0, 1)
     return out

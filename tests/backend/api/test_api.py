@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import time
-
 import cv2
 import numpy as np
 import pytest
@@ -119,9 +117,8 @@ def test_nothing_reaches_the_vehicle_without_the_token(client):
     assert client.put("/api/settings", json={"record_frames": False}).status_code == 401
     assert station.link.telemetry.armed is False
     assert station.link.telemetry.mode == "STABILIZE"
-    # The link's own log of what it sent holds no arming, mode or take-off command
-    # (it flushes the log every second: wait for that).
-    time.sleep(1.2)
+    # The link's own log of what it sent holds no arming, mode or take-off command.
+    station.link.flush_tlog()
     conn = mavutil.mavlink_connection(str(station.link.tlog_path))
     sent = []
     while (msg := conn.recv_match(blocking=False)) is not None:
