@@ -112,7 +112,7 @@ def run_uploads(n: int, seed: int) -> dict[str, Any]:
         tempfile.TemporaryDirectory() as tmp,
         Server(Path(tmp)) as server,
         Watch() as watch,
-        httpx.Client(base_url=server.url, timeout=60) as client,
+        httpx.Client(base_url=server.url, timeout=120) as client,
     ):
         bombs = measure_bombs(client)
         for _ in range(n):
@@ -234,7 +234,7 @@ def run_bodies(n: int, seed: int) -> dict[str, Any]:
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp, Server(Path(tmp)) as server, Watch() as watch:
         routes = _routes(server.app)
-        with httpx.Client(base_url=server.url, timeout=60) as client:
+        with httpx.Client(base_url=server.url, timeout=120) as client:
             for _ in range(n):
                 method, path = rng.choice(routes)
                 if rng.random() < 0.05:
