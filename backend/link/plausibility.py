@@ -70,7 +70,8 @@ def _global_position(msg: Any) -> str | None:
         return f"latitude/longitude ({msg.lat * 1e-7}, {msg.lon * 1e-7}) off the Earth"
     if not _within(msg.alt * 1e-3, *_MSL_M) or not _within(msg.relative_alt * 1e-3, *_ALT_M):
         return f"altitude ({msg.alt * 1e-3}, {msg.relative_alt * 1e-3} relative) m out of range"
-    if msg.hdg != 65535 and msg.hdg >= 36000:
+    # 0..35999 cdeg; 36000 is 360.00 degrees rounded up (as the stand-in may): the same as 0
+    if msg.hdg != 65535 and msg.hdg > 36000:
         return f"heading {msg.hdg * 0.01} deg"
     return None
 
