@@ -28,7 +28,7 @@ VOLUME ["/data"]
 # Inside the container the server must listen on all interfaces to be reachable;
 # docker-compose.yml publishes the ports on the host's loopback only.
 ENV VISLAND_HOST=0.0.0.0 VISLAND_DATA_DIR=/data
-EXPOSE 8000 8080
+EXPOSE 8000
 HEALTHCHECK --interval=10s --timeout=3s --start-period=20s \
     CMD python -c "import urllib.request; urllib.request.urlopen('http://127.0.0.1:8000/api/health', timeout=2)"
 CMD ["python", "-m", "backend", "serve"]

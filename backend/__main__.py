@@ -11,16 +11,40 @@ import argparse
 import logging
 import socket
 import sys
+from pathlib import Path
 
 from pydantic import ValidationError
 
+from backend.datadir import prepare_data_dir
 from backend.settings import Settings, resolve_token
 
 # flag -> (settings field, type, help)
 _FLAGS: dict[str, tuple[str, type, str]] = {
     "--host": ("host", str, "address to bind (default 127.0.0.1: this machine only)"),
     "--port": ("port", int, "dashboard/API port (default 8000)"),
-    "--viser-port": ("viser_port", int, "3D view port (default 8080; 0 turns it off)"),
+    "--viser-port": (
+        "viser_port",
+        int,
+        "loopback port of the 3D view's own server, reached through the station at "
+        "/view3d/ (default 8080; 0 turns the 3D view off)",
+    ),
+    "--allowed-hosts": (
+        "allowed_hosts",
+        str,
+        "host names the station answers to besides its own, comma-separated "
+        "(e.g. gcs.local,192.168.1.20)",
+    ),
+    "--allowed-origins": (
+        "allowed_origins",
+        str,
+        "browser origins allowed besides the station's own, comma-separated "
+        "(e.g. https://gcs.example:8443 for a reverse proxy)",
+    ),
+    "--max-upload-pixels": (
+        "max_upload_pixels",
+        int,
+        "largest picture accepted, in pixels (default 40000000)",
+    ),
     "--mavlink": (
         "mavlink",
         str,
@@ -104,6 +128,15 @@ def port_is_free(host: str, port: int) -> bool:
     return True
 
 
+def _token_line(token: str, path: Path | None) -> str:
+    """The banner's token line: the token itself only on the operator's terminal, never
+    into a pipe or a file, where it would sit in a log."""
+    where = f"kept in {path}" if path else "as given on the command line or environment"
+    if sys.stdout.isatty():
+        return f"{token}  ({where})"
+    return f"not printed here (not a terminal): {where}"
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     if args.command == "openapi":
@@ -116,31 +149,36 @@ def main(argv: list[str] | None = None) -> int:
             print(f"error: {where}: {err['msg'].removeprefix('Value error, ')}", file=sys.stderr)
         return 2
 
-    for flag, port in (("--port", settings.port), ("--viser-port", settings.viser_port)):
-        if port and not port_is_free(settings.host, port):
-            print(
-                f"error: {settings.host}:{port} is in use: choose another with {flag}",
-                file=sys.stderr,
-            )
+    # The 3D view's own server listens on loopback only: browsers reach it through the station.
+    ports = (
+        ("--port", settings.host, settings.port),
+        ("--viser-port", "127.0.0.1", settings.viser_port),
+    )
+    for flag, host, port in ports:
+        if port and not port_is_free(host, port):
+            print(f"error: {host}:{port} is in use: choose another with {flag}", file=sys.stderr)
             return 2
 
     import uvicorn
 
+    from backend.api.security import install_log_redaction
     from backend.app import SERVER_OPTIONS, create_app
     from backend.viewer3d import browsable_host
 
     logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
+    prepare_data_dir(settings.data_dir)
     token, token_path = resolve_token(settings)
+    install_log_redaction(token)
     settings = settings.model_copy(update={"token": token})
     app = create_app(settings)
-    kept = f"kept in {token_path}" if token_path else "given on the command line/env"
+    base = f"http://{browsable_host(settings.host)}:{settings.port}"
     lines = [
         f"Visland ground station {'(stand-in vehicle)' if settings.mavlink is None else ''}",
-        f"  dashboard  http://{browsable_host(settings.host)}:{settings.port}",
+        f"  dashboard  {base}  (enter the operator token there)",
     ]
     if settings.viser_port:
-        lines.append(f"  3D view    http://{browsable_host(settings.host)}:{settings.viser_port}")
-    lines += [f"  token      {token}  ({kept})", f"  data       {settings.data_dir}"]
+        lines.append(f"  3D view    {base}/view3d/")
+    lines += [f"  token      {_token_line(token, token_path)}", f"  data       {settings.data_dir}"]
     if settings.host not in ("127.0.0.1", "localhost", "::1"):
         lines.append(
             f"  warning    listening on {settings.host}: reachable from the network; "

@@ -2,10 +2,12 @@
 
 The lifespan builds the station (``backend.station.build_station``) and starts it,
 off the event loop. Routes live under ``/api`` (one router per resource), the
-WebSocket at ``/ws``, the OpenAPI docs at ``/docs`` (the document, with the
-WebSocket's messages, from :mod:`backend.api.openapi`) and the built dashboard
-(``frontend/dist``) at ``/``. Every error is ``{"detail": "<sentence>"}``; invalid
-input is a 422 with a sentence, never a 500.
+WebSocket at ``/ws``, the 3D view at ``/view3d/`` (:mod:`backend.api.view3d`), the
+OpenAPI docs at ``/docs`` (the document, with the WebSocket's messages, from
+:mod:`backend.api.openapi`) and the built dashboard (``frontend/dist``) at ``/``.
+Every request passes the guard of :mod:`backend.api.security` first (Host, Origin,
+site, no token in URLs, the operator token before any body is read). Every error is
+``{"detail": "<sentence>"}``; invalid input is a 422 with a sentence, never a 500.
 """
 
 from __future__ import annotations
@@ -24,8 +26,20 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from backend.api.openapi import install_openapi
-from backend.api.routes import flights, health, missions, reference, status, telemetry, vehicle
+from backend.api.routes import (
+    flights,
+    health,
+    missions,
+    reference,
+    session,
+    status,
+    telemetry,
+    vehicle,
+)
 from backend.api.routes import settings as settings_routes
+from backend.api.security import SiteRules, StationGuard, install_log_redaction
+from backend.api.view3d import install_view3d
+from backend.api.view_sessions import ViewSessions
 from backend.api.ws import Hub
 from backend.settings import Settings, get_settings
 from backend.station import VERSION, Station, build_station
@@ -37,7 +51,8 @@ FRONTEND_DIST = Path(__file__).resolve().parent.parent / "frontend" / "dist"
 #: No per-message deflate on the WebSocket: its compressor is per connection, so every
 #: JPEG would be deflated once per viewer (for nothing: JPEG does not shrink) on the
 #: event loop, which then has no time left for the API.
-SERVER_OPTIONS: dict[str, object] = {"ws_per_message_deflate": False}
+#: Client messages to /ws are small; the 3D view's (camera moves) too.
+SERVER_OPTIONS: dict[str, object] = {"ws_per_message_deflate": False, "ws_max_size": 1 << 20}
 
 # Multipart framing around the file: what an upload may carry beyond the file itself.
 _MULTIPART_SLACK = 64 * 1024
@@ -142,6 +157,7 @@ def create_app(settings: Settings | None = None, *, station: Station | None = No
             else await anyio.to_thread.run_sync(build_station, settings)
         )
         await anyio.to_thread.run_sync(running.start)
+        install_log_redaction(running.token)
         app.state.station = running
         hub = Hub(running)
         app.state.hub = hub
@@ -160,7 +176,16 @@ def create_app(settings: Settings | None = None, *, station: Station | None = No
     )
     app.state.station = None
     app.state.settings = settings
+    app.state.view_sessions = ViewSessions()
     app.add_middleware(UploadLimit, limit=settings.max_upload_bytes)
+    # Added last, so it runs first: nothing reaches a route (or reads a body) before it.
+    app.add_middleware(
+        StationGuard,
+        rules=SiteRules.for_station(
+            settings.host, settings.allowed_hosts, settings.allowed_origins
+        ),
+        station=lambda: app.state.station,
+    )
 
     @app.exception_handler(RequestValidationError)
     async def invalid_input(request: Request, exc: RequestValidationError) -> JSONResponse:
@@ -190,6 +215,7 @@ def create_app(settings: Settings | None = None, *, station: Station | None = No
         flights,
         missions,
         settings_routes,
+        session,
     ):
         app.include_router(module.router, prefix="/api")
 
@@ -197,6 +223,7 @@ def create_app(settings: Settings | None = None, *, station: Station | None = No
     async def websocket(ws: WebSocket) -> None:
         await app.state.hub.serve(ws)
 
+    install_view3d(app)
     install_openapi(app)
 
     if (FRONTEND_DIST / "index.html").is_file():

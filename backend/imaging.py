@@ -5,43 +5,72 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from backend.image_header import BadHeader, ImageHeader, read_header
+
 
 class UnsupportedImage(ValueError):
     """The upload is not a picture we can decode (HTTP 415)."""
 
 
-_MAGIC = (
-    (b"\x89PNG\r\n\x1a\n", "png"),
-    (b"\xff\xd8\xff", "jpeg"),
-    (b"BM", "bmp"),
-    (b"II*\x00", "tiff"),
-    (b"MM\x00*", "tiff"),
-)
+class TooManyPixels(ValueError):
+    """The picture's header claims more pixels than the budget (HTTP 413)."""
+
+
+#: The default pixel budget (the ``max_upload_pixels`` setting's default): 40 MP.
+DEFAULT_MAX_PIXELS = 40_000_000
 
 
 def sniff_image(data: bytes) -> str | None:
-    """The picture format by its magic bytes (png, jpeg, bmp, tiff, webp) or ``None``.
+    """The picture format by its header (png, jpeg, bmp, tiff, webp) or ``None``.
 
-    >>> sniff_image(b"\\x89PNG\\r\\n\\x1a\\n..."), sniff_image(b"GIF89a")
-    ('png', None)
+    >>> import cv2, numpy as np
+    >>> sniff_image(cv2.imencode(".png", np.zeros((4, 4), np.uint8))[1].tobytes())
+    'png'
+    >>> sniff_image(b"GIF89a") is None
+    True
     """
-    for magic, kind in _MAGIC:
-        if data.startswith(magic):
-            return kind
-    if len(data) >= 12 and data[:4] == b"RIFF" and data[8:12] == b"WEBP":
-        return "webp"
-    return None
+    try:
+        return read_header(data).format
+    except BadHeader:
+        return None
 
 
-def decode_image(data: bytes) -> np.ndarray:
-    """Decode an uploaded picture to BGR; :class:`UnsupportedImage` when it is not one."""
-    kind = sniff_image(data)
-    if kind is None:
-        raise UnsupportedImage("The file is not a picture: expected PNG, JPEG, BMP, TIFF or WebP.")
-    image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+def decode_image(data: bytes, *, max_pixels: int = DEFAULT_MAX_PIXELS) -> np.ndarray:
+    """Decode an uploaded picture to BGR.
+
+    The size is read from the header first (:func:`backend.image_header.read_header`):
+    over ``max_pixels`` raises :class:`TooManyPixels` without decoding anything, so a
+    decompression bomb costs nothing. :class:`UnsupportedImage` when it is not a
+    picture we accept or does not decode.
+    """
+    try:
+        header = read_header(data)
+    except BadHeader as exc:
+        raise UnsupportedImage(str(exc)) from None
+    if header.decode_pixels > max_pixels:
+        raise TooManyPixels(_over_budget(header, max_pixels))
+    name = header.format.upper()
+    try:
+        image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+    except cv2.error:
+        image = None
     if image is None or image.size == 0:
-        raise UnsupportedImage(f"The file looks like {kind.upper()} but cannot be decoded.")
+        raise UnsupportedImage(f"The file looks like {name} but cannot be decoded.")
+    if image.shape[0] * image.shape[1] != header.pixels:
+        raise UnsupportedImage(f"The {name} decodes to another size than its header says.")
     return np.asarray(image)
+
+
+def _over_budget(header: ImageHeader, max_pixels: int) -> str:
+    limit = f"the limit of {max_pixels / 1e6:g} MP"
+    if header.tile_pixels > header.pixels:
+        return f"The TIFF's tiles are larger than {limit}."
+    mp = header.pixels / 1e6
+    size = f"{mp:,.0f}" if mp >= 100 else f"{mp:.3g}"
+    return (
+        f"The picture is {header.width} x {header.height} pixels ({size} MP), over {limit}: "
+        "scale it down (the pad needs far fewer)."
+    )
 
 
 def draw_corners(image_bgr: np.ndarray, corners_px: np.ndarray) -> np.ndarray:

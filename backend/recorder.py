@@ -19,6 +19,7 @@ waited for.
 from __future__ import annotations
 
 import logging
+import os
 import shutil
 import struct
 import threading
@@ -171,7 +172,10 @@ class Recorder:
             name = None
             if encoded.jpeg is not None and self._record_frames():
                 name = f"frames/{frame.seq:06d}.jpg"
-                (cur.dir / name).write_bytes(encoded.jpeg)
+                # Whole or absent, never half a JPEG, whenever the process dies.
+                part = cur.dir / (name + ".part")
+                part.write_bytes(encoded.jpeg)
+                os.replace(part, cur.dir / name)
             head = {
                 "seq": frame.seq,
                 "t_capture": frame.t_capture,
@@ -185,17 +189,22 @@ class Recorder:
             return True
 
     def _write_tlog(self, cur: _Flight, t_end: float) -> Path:
-        out = cur.dir / "flight.tlog"
-        tmp = out.with_suffix(".tlog.part")
-        with tmp.open("wb") as fh:
-            if self._tlog_dir is not None and self._tlog_dir.is_dir():
-                for path in sorted(self._tlog_dir.glob("*.tlog")):
-                    # Only session logs that were written during the flight can hold it.
-                    if path.stat().st_mtime < cur.started - 1.0:
-                        continue
-                    copy_tlog_window(path, fh, cur.started, t_end)
-        shutil.move(tmp, out)
-        return out
+        return write_flight_tlog(cur.dir, self._tlog_dir, cur.started, t_end)
+
+
+def write_flight_tlog(folder: Path, tlog_dir: Path | None, started: float, ended: float) -> Path:
+    """Write ``folder/flight.tlog``: the link's session logs cut to [started, ended]."""
+    out = folder / "flight.tlog"
+    tmp = out.with_suffix(".tlog.part")
+    with tmp.open("wb") as fh:
+        if tlog_dir is not None and tlog_dir.is_dir():
+            for path in sorted(tlog_dir.glob("*.tlog")):
+                # Only session logs that were written during the flight can hold it.
+                if path.stat().st_mtime < started - 1.0:
+                    continue
+                copy_tlog_window(path, fh, started, ended)
+    shutil.move(tmp, out)
+    return out
 
 
 def copy_tlog_window(path: Path, out: IO[bytes], t_start: float, t_end: float) -> int:

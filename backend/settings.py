@@ -11,9 +11,10 @@ import os
 import secrets
 from functools import lru_cache
 from pathlib import Path
+from typing import Annotated
 
 from pydantic import Field, field_validator
-from pydantic_settings import BaseSettings, SettingsConfigDict
+from pydantic_settings import BaseSettings, NoDecode, SettingsConfigDict
 
 DEFAULT_PAD_SIZE_M = 0.55
 MAX_PAD_SIZE_M = 20.0
@@ -24,7 +25,10 @@ class Settings(BaseSettings):
 
     ``mavlink=None`` starts the in-process ArduCopter stand-in; ``camera="sim"`` renders
     the pad from the vehicle's reported pose; ``reference=None`` uses the default pad
-    picture. ``viser_port=0`` turns the 3D view off (tests).
+    picture. ``viser_port`` is the loopback port of the 3D view's own server, which
+    browsers reach only through the station (``/view3d/``); 0 turns the 3D view off.
+    ``allowed_hosts``/``allowed_origins``: names and browser origins the station answers
+    to besides its own (comma-separated in the environment and on the command line).
     """
 
     model_config = SettingsConfigDict(env_prefix="VISLAND_", extra="ignore")
@@ -51,6 +55,11 @@ class Settings(BaseSettings):
     record_frames: bool = True
     jpeg_quality: int = Field(80, ge=10, le=100)
     max_upload_bytes: int = Field(20 * 1024 * 1024, gt=0)
+    # Pictures are refused from their header when larger than this (decoding one takes
+    # about 3 bytes a pixel, more on the way): 40 MP is a 7300 x 5500 photo.
+    max_upload_pixels: int = Field(40_000_000, gt=0, le=1_000_000_000)
+    allowed_hosts: Annotated[list[str], NoDecode] = []
+    allowed_origins: Annotated[list[str], NoDecode] = []
     signing_key: str | None = None
     # The in-process stand-in vehicle (used when mavlink is None).
     sim_ready_after: float = Field(1.0, gt=0, le=10)
@@ -68,6 +77,30 @@ class Settings(BaseSettings):
         # An empty env var (VISLAND_MAVLINK=) means "not given", as on the CLI.
         if isinstance(value, str) and not value.strip():
             return None
+        return value
+
+    @field_validator("allowed_hosts", "allowed_origins", mode="before")
+    @classmethod
+    def _comma_list(cls, value: object) -> object:
+        if isinstance(value, str):
+            return [part.strip() for part in value.split(",") if part.strip()]
+        return value
+
+    @field_validator("allowed_hosts")
+    @classmethod
+    def _host_names(cls, value: list[str]) -> list[str]:
+        for name in value:
+            if not name or any(c.isspace() or c in "/?#@" for c in name):
+                raise ValueError(f"{name!r} is not a host name (e.g. gcs.local or 192.168.1.20)")
+        return value
+
+    @field_validator("allowed_origins")
+    @classmethod
+    def _origins(cls, value: list[str]) -> list[str]:
+        for origin in value:
+            scheme, sep, rest = origin.partition("://")
+            if scheme not in ("http", "https") or not sep or not rest or "/" in rest.rstrip("/"):
+                raise ValueError(f"{origin!r} is not an origin (e.g. https://gcs.example:8443)")
         return value
 
     @field_validator("token")

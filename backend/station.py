@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any, Protocol
 
 from backend.camera import FrameSource, open_source
+from backend.datadir import prepare_data_dir
 from backend.encoder import EncodedFrame, FrameEncoder
 from backend.framebus import FrameBus
 from backend.frames import camera_yaw_in_pad, gravity_in_camera
@@ -37,9 +38,11 @@ from backend.link import LinkEvent, VehicleLink
 from backend.missions.geometry import DOWN_MOUNT
 from backend.missions.manager import MissionManager
 from backend.recorder import Recorder
+from backend.recovery import recover
 from backend.services.events import EventLog
 from backend.services.flights import FlightService
 from backend.services.references import ReferenceService
+from backend.services.rejections import Rejections
 from backend.services.runtime import RuntimeSettings
 from backend.services.status import StatusService
 from backend.services.vehicle import VehicleService
@@ -91,6 +94,7 @@ class Station:
     viewer: Viewer3D | None
     viewer_feed: ViewerFeed | None
     status: StatusService
+    rejections: Rejections
     started: bool = False
     _stopped: bool = field(default=False, repr=False)
 
@@ -152,12 +156,14 @@ def build_station(settings: Settings) -> Station:
     picture without an H), after closing whatever was built.
     """
     with contextlib.ExitStack() as undo:
-        data_dir = Path(settings.data_dir)
-        data_dir.mkdir(parents=True, exist_ok=True)
+        data_dir = prepare_data_dir(settings.data_dir)
         token, token_path = resolve_token(settings)
         storage = Storage(data_dir / "visland.db")
         undo.callback(storage.close)
         events = EventLog(storage)
+        tlog_dir = data_dir / "tlogs"
+        # What a crash of the last run left open is closed before anything runs.
+        recover(storage, tlog_dir=tlog_dir, emit=events.emit)
         references = ReferenceService(
             storage, data_dir / "references", events, verifier_views=settings.verifier_views
         )
@@ -171,7 +177,6 @@ def build_station(settings: Settings) -> Station:
             undo.callback(stand_in.stop)
             url = stand_in.address
         runtime = RuntimeSettings(settings, storage, events, mavlink_url=url)
-        tlog_dir = data_dir / "tlogs"
         link = VehicleLink(
             url,
             tlog_dir=tlog_dir,
@@ -229,7 +234,7 @@ def build_station(settings: Settings) -> Station:
             active = references.active
             assert active is not None  # load_initial made one active
             viewer = Viewer3D(
-                settings.host,
+                "127.0.0.1",  # loopback only: browsers come through the station's guard
                 settings.viser_port,
                 pad_image_bgr=active.reference.image,
                 pad_size_m=active.reference.pad_size_m,
@@ -242,6 +247,7 @@ def build_station(settings: Settings) -> Station:
             shown = viewer
             references.listen(lambda a: shown.set_pad(a.reference.image, a.reference.pad_size_m))
 
+        rejections = Rejections()
         status = StatusService(
             vehicle=vehicle,
             source=source,
@@ -250,6 +256,7 @@ def build_station(settings: Settings) -> Station:
             references=references,
             flights=flights,
             viser_url=None if viewer is None else viewer.url,
+            rejections=rejections,
         )
         # Whoever sees an event (a flight, a mission's state, the link) then reads a
         # status that shows it; a mission's live state moves the status on its own.
@@ -282,6 +289,7 @@ def build_station(settings: Settings) -> Station:
         viewer=viewer,
         viewer_feed=viewer_feed,
         status=status,
+        rejections=rejections,
     )
 
 

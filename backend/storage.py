@@ -1,20 +1,28 @@
 """SQLite storage (stdlib ``sqlite3``): references, flights, mission runs, events, settings.
 
 One file under the data directory; the schema carries a version and is migrated
-forward on open. Every write commits at once (WAL journal), so nothing is lost on a
-restart or a crash. Safe to call from several threads (one connection, one lock).
+forward on open. Every write commits at once (WAL journal, ``synchronous=FULL``), so
+nothing is lost on a restart, a crash or a power cut; rows a crash left open are
+closed as ``interrupted`` on the next start (:mod:`backend.recovery`). Safe to call
+from several threads (one connection, one lock).
 """
 
 from __future__ import annotations
 
 import json
+import logging
 import sqlite3
 import threading
 import time
 from pathlib import Path
 from typing import Any
 
+log = logging.getLogger(__name__)
+
 SCHEMA_VERSION = 1
+#: The outcome of a mission run, and the end reason of a flight, that were still open
+#: when the station stopped without closing them (a crash, a kill, a power cut).
+INTERRUPTED = "interrupted"
 
 _SCHEMA_V1 = """
 CREATE TABLE IF NOT EXISTS refs (
@@ -70,8 +78,14 @@ class Storage:
         )
         self._db.row_factory = sqlite3.Row
         with self._lock:
-            self._db.execute("PRAGMA journal_mode=WAL")
-            self._db.execute("PRAGMA synchronous=NORMAL")
+            mode = self._db.execute("PRAGMA journal_mode=WAL").fetchone()[0]
+            if str(mode).lower() != "wal":
+                log.warning("%s: SQLite kept journal mode %s (no WAL here)", self.path, mode)
+            # FULL: a commit returns only once the WAL is on disk, so a power cut loses
+            # nothing the station reported done (a run's outcome, a flight's end).
+            # NORMAL would stay consistent but could lose the last commits; our writes
+            # are few (rows, state changes, events), so the fsync each costs is cheap.
+            self._db.execute("PRAGMA synchronous=FULL")
             self._migrate()
 
     def _migrate(self) -> None:
@@ -89,10 +103,6 @@ class Storage:
             self._db.execute("INSERT INTO schema_version VALUES (?)", (SCHEMA_VERSION,))
         else:
             self._db.execute("UPDATE schema_version SET version = ?", (SCHEMA_VERSION,))
-        # A flight still open belongs to a run that ended without closing it.
-        self._db.execute(
-            "UPDATE flights SET ended = started, end_reason = 'interrupted' WHERE ended IS NULL"
-        )
 
     @property
     def schema_version(self) -> int:
@@ -170,6 +180,20 @@ class Storage:
                 (time.time(), frames, end_reason, flight_id),
             )
 
+    def open_flights(self) -> list[dict]:
+        """Flights never ended (the station stopped while recording them)."""
+        with self._lock:
+            rows = self._db.execute("SELECT * FROM flights WHERE ended IS NULL").fetchall()
+        return [dict(r) for r in rows]
+
+    def close_interrupted_flight(self, flight_id: int, *, ended: float, frames: int) -> None:
+        with self._lock:
+            self._db.execute(
+                "UPDATE flights SET ended = ?, frames = ?, end_reason = ? "
+                "WHERE id = ? AND ended IS NULL",
+                (ended, frames, INTERRUPTED, flight_id),
+            )
+
     def get_flight(self, flight_id: int) -> dict | None:
         with self._lock:
             row = self._db.execute("SELECT * FROM flights WHERE id = ?", (flight_id,)).fetchone()
@@ -195,6 +219,34 @@ class Storage:
                 "UPDATE mission_runs SET ended = ?, outcome = ?, detail = ? WHERE id = ?",
                 (time.time(), outcome, json.dumps(detail or {}), run_id),
             )
+
+    def checkpoint_mission_run(self, run_id: int, detail: dict) -> None:
+        """Store a running mission's record so far (what a crash leaves is this)."""
+        with self._lock:
+            self._db.execute(
+                "UPDATE mission_runs SET detail = ? WHERE id = ? AND ended IS NULL",
+                (json.dumps(detail), run_id),
+            )
+
+    def open_mission_runs(self) -> list[dict]:
+        """Mission runs never ended (the station stopped while they ran)."""
+        with self._lock:
+            rows = self._db.execute("SELECT * FROM mission_runs WHERE ended IS NULL").fetchall()
+        return [{**dict(r), "detail": json.loads(r["detail"])} for r in rows]
+
+    def close_interrupted_mission_run(self, run_id: int, *, ended: float, detail: dict) -> None:
+        with self._lock:
+            self._db.execute(
+                "UPDATE mission_runs SET ended = ?, outcome = ?, detail = ? "
+                "WHERE id = ? AND ended IS NULL",
+                (ended, INTERRUPTED, json.dumps(detail), run_id),
+            )
+
+    def integrity(self) -> str:
+        """SQLite's ``PRAGMA integrity_check`` answer ("ok" when the file is sound)."""
+        with self._lock:
+            rows = self._db.execute("PRAGMA integrity_check").fetchall()
+        return "; ".join(str(r[0]) for r in rows)
 
     def list_mission_runs(self, limit: int | None = None) -> list[dict]:
         """Mission runs, newest first (at most ``limit``)."""

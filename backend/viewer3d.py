@@ -11,13 +11,14 @@ scene reads like a map. Scene paths:
 - ``/trail``: the vehicle's recent positions
 
 Handles are created once and their properties assigned; each update is one atomic
-batch. The dashboard embeds the viser page in an iframe.
+batch. The dashboard embeds the view (``/view3d/`` on the station's port) in an iframe.
 """
 
 from __future__ import annotations
 
 import logging
 import math
+import secrets
 import threading
 import time
 from collections import deque
@@ -29,6 +30,7 @@ import numpy as np
 from backend.framebus import FrameBus
 from backend.frames import rot_ned_body, rot_ned_pad
 from backend.link import Telemetry
+from backend.tokens import tokens_equal
 from backend.vision_worker import Processed
 
 if TYPE_CHECKING:
@@ -57,14 +59,51 @@ def browsable_host(host: str) -> str:
     return "127.0.0.1" if host in ("0.0.0.0", "::", "") else host
 
 
+def _gate(server: viser.ViserServer, secret: str) -> None:
+    """Close each WebSocket to viser's own port that lacks the proxy's secret header.
+
+    viser has no hook for this, so it reaches into its WebSocket server: the connect
+    callbacks run (and are awaited) after the connection is registered in
+    ``_live_connections`` and before anything is sent to it. If a viser upgrade moves
+    these, this raises at start (no ungated 3D view), and the gate's test fails.
+    """
+    infra = getattr(server, "_websock_server", None)
+    if infra is None or not hasattr(infra, "_live_connections"):
+        raise RuntimeError("this viser version cannot be gated: the 3D view stays off")
+
+    async def check(client: Any) -> None:
+        connection = infra._live_connections.get(client.client_id)
+        request = getattr(connection, "request", None)
+        given = None if request is None else request.headers.get(PROXY_HEADER)
+        if isinstance(given, str) and tokens_equal(given, secret):
+            return
+        if connection is None:
+            raise ConnectionRefusedError("not the station's proxy")  # closes it (1011)
+        await connection.close(1008, "The 3D view is reached through the station: /view3d/")
+
+    infra.on_client_connect(check)
+
+
 def _wxyz(R: np.ndarray) -> np.ndarray:
     import viser.transforms as tf
 
     return np.asarray(tf.SO3.from_matrix(np.asarray(R, float)).wxyz)
 
 
+#: Where browsers find the 3D view: on the station's own port, behind its guard.
+VIEW_PATH = "/view3d/"
+#: The header the station's proxy sends to viser with its per-process secret.
+PROXY_HEADER = "X-Visland-View"
+
+
 class Viewer3D:
-    """A viser server on ``host:port`` showing the landing scene.
+    """A viser server on ``host:port`` (loopback) showing the landing scene.
+
+    Browsers never talk to it directly: the station proxies it at ``/view3d/`` under
+    its own Host, Origin and token rules (``backend.api.view3d``), and viser's own port
+    closes every WebSocket that does not carry :data:`PROXY_HEADER` with
+    :attr:`proxy_secret` (a page elsewhere cannot set a header on a WebSocket) before
+    anything of the scene is sent.
 
     Parameters
     ----------
@@ -98,11 +137,18 @@ class Viewer3D:
         self._lock = threading.Lock()
         self._server: viser.ViserServer | None = None
         self._h: dict[str, Any] = {}
+        self.proxy_secret = secrets.token_urlsafe(32)
 
     @property
     def url(self) -> str:
-        """Where a browser on this machine finds the view (a wildcard bind means loopback)."""
-        return f"http://{browsable_host(self.host)}:{self.port}"
+        """Where a browser finds the view: a path on the station's own port."""
+        return VIEW_PATH
+
+    @property
+    def bound_port(self) -> int | None:
+        """The port viser listens on (it takes the next free one if ``port`` is busy)."""
+        server = self._server
+        return None if server is None else int(server.get_port())
 
     @property
     def R_world_pad(self) -> np.ndarray:
@@ -120,6 +166,7 @@ class Viewer3D:
                 return
             server = viser.ViserServer(host=self.host, port=self.port, verbose=False)
             self._server = server
+            _gate(server, self.proxy_secret)
             scene = server.scene
             scene.set_up_direction("+z")
             # Start looking at the pad from the south-west, a few metres up.

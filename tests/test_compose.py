@@ -22,7 +22,8 @@ def test_gcs_service_builds_this_repo_and_publishes_loopback_only(compose):
     assert gcs["build"]["context"] == "." and gcs["build"]["dockerfile"] == "Dockerfile"
     assert (ROOT / gcs["build"]["dockerfile"]).is_file()
     assert "profiles" not in gcs  # `docker compose up` starts it
-    assert sorted(gcs["ports"]) == ["127.0.0.1:8000:8000", "127.0.0.1:8080:8080"]
+    # one port: the 3D view comes through the station (/view3d/), not a port of its own
+    assert sorted(gcs["ports"]) == ["127.0.0.1:8000:8000"]
     for service in compose["services"].values():
         for port in service.get("ports", []):
             assert str(port).startswith("127.0.0.1:"), f"{port} would be reachable from the LAN"
@@ -65,7 +66,7 @@ def test_compose_documents_both_ways_to_start(compose):
 def test_dockerfile_runs_the_server_and_exposes_its_ports():
     text = (ROOT / "Dockerfile").read_text()
     assert re.search(r'^CMD \["python", "-m", "backend", "serve"\]', text, re.M)
-    assert re.search(r"^EXPOSE 8000 8080$", text, re.M)
+    assert re.search(r"^EXPOSE 8000$", text, re.M)
     assert "torch==2.13.0 --index-url https://download.pytorch.org/whl/cpu" in text
     assert "npm run build" in text and "frontend/dist" in text
     assert re.search(r"^USER visland$", text, re.M)  # not root

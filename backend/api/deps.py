@@ -2,18 +2,23 @@
 
 Routes depend on the services of the running station (``backend.services``), never
 on the storage or the station's other parts. The token is the operator's bearer
-token (OpenAPI security scheme ``OperatorToken``); viewing needs it only when the
-``view_requires_token`` setting is on.
+token (OpenAPI security scheme ``OperatorToken``); viewing needs it (or the view
+cookie, :mod:`backend.api.view_sessions`) only when the ``view_requires_token``
+setting is on. Routes that change something are checked for the token before their
+body is read, by :class:`backend.api.security.StationGuard`; the dependencies here
+check again and document it.
 """
 
 from __future__ import annotations
 
-import secrets
 from typing import Annotated
 
 from fastapi import Depends, Header, HTTPException, Path, Request, status
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
+from starlette.requests import HTTPConnection
 
+from backend.api.security import token_problem
+from backend.api.view_sessions import VIEW_COOKIE, ViewSessions
 from backend.missions.manager import MissionManager
 from backend.services.events import EventLog
 from backend.services.flights import FlightService
@@ -23,9 +28,6 @@ from backend.services.status import StatusService
 from backend.services.vehicle import VehicleService
 from backend.station import Station
 
-_BEARER_HINT = (
-    "send it as 'Authorization: Bearer <token>' (printed at start, kept in DATA_DIR/token)"
-)
 _TOKEN_DOC = "The operator token, printed at start and kept in DATA_DIR/token."
 
 # For the OpenAPI document only: the checks below read the header themselves, so that
@@ -90,24 +92,10 @@ RunId = Annotated[int, Path(ge=1, le=_MAX_ID, description="a mission run's id")]
 
 def check_token(expected: str, authorization: str | None) -> None:
     """401 with a sentence unless ``authorization`` is ``Bearer <expected>``."""
-    if not authorization:
+    problem = token_problem(expected, authorization)
+    if problem is not None:
         raise HTTPException(
-            status.HTTP_401_UNAUTHORIZED,
-            f"This needs the operator token: {_BEARER_HINT}.",
-            headers={"WWW-Authenticate": "Bearer"},
-        )
-    scheme, _, token = authorization.partition(" ")
-    if scheme.lower() != "bearer" or not token.strip():
-        raise HTTPException(
-            status.HTTP_401_UNAUTHORIZED,
-            f"The Authorization header must be 'Bearer <token>': {_BEARER_HINT}.",
-            headers={"WWW-Authenticate": "Bearer"},
-        )
-    if not secrets.compare_digest(token.strip().encode(), expected.encode()):
-        raise HTTPException(
-            status.HTTP_401_UNAUTHORIZED,
-            "The operator token is wrong; nothing was done.",
-            headers={"WWW-Authenticate": "Bearer"},
+            status.HTTP_401_UNAUTHORIZED, problem, headers={"WWW-Authenticate": "Bearer"}
         )
 
 
@@ -124,11 +112,21 @@ def require_operator(
 
 
 def require_viewer(
-    station: StationDep, _doc: _ViewerDoc, authorization: AuthorizationHeader = None
+    request: Request,
+    station: StationDep,
+    _doc: _ViewerDoc,
+    authorization: AuthorizationHeader = None,
 ) -> None:
-    """Viewing: open unless the view_requires_token setting is on."""
-    if station.runtime.view_requires_token:
+    """Viewing: open unless the view_requires_token setting is on; then the token, or
+    the view cookie a dashboard got with it (pictures and the 3D view send no header)."""
+    if station.runtime.view_requires_token and not view_cookie_ok(request):
         check_token(station.token, authorization)
+
+
+def view_cookie_ok(connection: HTTPConnection) -> bool:
+    """Whether the request (or WebSocket) carries a view cookie this station issued."""
+    sessions: ViewSessions | None = getattr(connection.app.state, "view_sessions", None)
+    return sessions is not None and sessions.valid(connection.cookies.get(VIEW_COOKIE))
 
 
 Operator = Depends(require_operator)

@@ -12,7 +12,7 @@ _MEANING = {
     404: "No such thing.",
     409: "Refused: the vehicle said no (its reasons verbatim), or the state forbids it.",
     410: "Stored, but its files are gone.",
-    413: "The upload is larger than the limit.",
+    413: "The upload is larger than the limit (in bytes, or in pixels by its header).",
     415: "The upload is not a picture we can read.",
     422: "The input is invalid (one sentence says why).",
     503: "The link to the vehicle is down, or the station is not running.",

@@ -4,8 +4,9 @@ Server to browser, JSON text: ``hello`` (once, first), ``telemetry`` (10 Hz),
 ``status`` (1 Hz and whenever a mission moves), ``frame`` (each processed frame),
 ``event`` (as they happen), ``pong``. Binary: a camera or threshold JPEG behind a
 length-prefixed JSON header (:class:`BinaryFrameHeader`). Browser to server, JSON
-text: ``ping``, ``subscribe`` (threshold view on or off), ``auth`` (the token, when
-viewing needs one). The OpenAPI document carries these models as components
+text: ``auth`` first (the token; required when viewing needs it, closes with 4401 when
+missing, wrong or garbled, 4408 when it does not come in time), ``ping``,
+``subscribe`` (threshold view on or off). The OpenAPI document carries these models as components
 (``backend.api.openapi``), so the dashboard's types come from them too.
 """
 
@@ -145,6 +146,8 @@ class SubscribeMessage(Model):
 
 
 class AuthMessage(Model):
+    """The first message: the operator token (never in the socket's URL)."""
+
     type: Literal["auth"]
     token: str
 

@@ -28,13 +28,19 @@ WS_DESCRIPTION = """
 `TelemetryMessage` (10 Hz), `StatusMessage` (1 Hz and whenever a mission moves),
 `FrameMessage` (each processed frame), `EventMessage`, `PongMessage`. Binary: a
 4-byte big-endian length N, N bytes of JSON (`BinaryFrameHeader`), then the JPEG.
-Browser to server, JSON text: `PingMessage`, `SubscribeMessage`, `AuthMessage` (the
-token, when viewing needs one; or connect with `?token=`). Garbage closes the socket
-with code 1003 and a sentence.
+Browser to server, JSON text: `AuthMessage` first (the token: required within 5 s
+when viewing needs it, and checked whenever sent; missing, wrong or garbled closes
+the socket with 4401, none in time with 4408), `PingMessage`, `SubscribeMessage`.
+Garbage closes the socket with code 1003 and a sentence.
 
 **Token.** Commands and uploads need `Authorization: Bearer <token>` (the token is
-printed at start and kept in DATA_DIR/token); viewing needs it only when the
-`view_requires_token` setting is on.
+kept in DATA_DIR/token), checked before the body is read; viewing needs it (or the
+view cookie of `POST /api/session`) only when the `view_requires_token` setting is
+on. The token never goes in a URL: a `token` query parameter is refused (400).
+
+**Who may ask.** A request must name the station by one of its own names in `Host`
+(else 400) and, from a browser, come from the station's own pages (`Origin`, fetch
+metadata; else 403). The 3D view is at `/view3d/` under the same rules.
 """
 
 

@@ -43,6 +43,13 @@ class CommandResult(Model):
     elapsed_s: float = 0.0
 
 
+class ViewSession(Model):
+    """Whether this browser holds a view cookie now (``POST``/``DELETE /api/session``)."""
+
+    view_cookie: bool
+    detail: str
+
+
 class Health(Model):
     ok: bool
     version: str
@@ -132,6 +139,8 @@ class Telemetry(Model):
     heartbeat_age_s: float | None
     packets_lost_pct: float | None
     handler_errors: int
+    implausible: int = Field(description="messages dropped: their values cannot be real")
+    last_implausible: str | None
     reconnects: int
     last_error: str | None
     attitude_time_boot_ms: int | None
@@ -302,6 +311,9 @@ class LinkStatus(Model):
     heartbeat_age_s: float | None
     msgs_per_s: float | None
     crc_errors: int
+    implausible: int = Field(
+        description="telemetry messages dropped because their values cannot be real"
+    )
 
 
 class CameraStatus(Model):
@@ -323,6 +335,19 @@ class PipelineStatus(Model):
     last_error: str
 
 
+class Rejected(Model):
+    """What the station refused at its edge since it started (counted, never a crash)."""
+
+    requests: int = Field(
+        description="HTTP requests refused for their Host, Origin or site, or a token in the URL"
+    )
+    sockets: int = Field(
+        description="WebSockets refused or closed: Host, Origin, a missing or wrong token, "
+        "garbage messages"
+    )
+    last_reason: str
+
+
 class Status(Model):
     """Link, camera, pipeline, mission, reference, flight and 3D view, in one snapshot."""
 
@@ -332,7 +357,10 @@ class Status(Model):
     mission: MissionSnapshot | None
     reference: ReferenceSummary | None
     flight: FlightRef | None
-    viser_url: str | None
+    viser_url: str | None = Field(
+        description="where the dashboard finds the 3D view (a path on this station)"
+    )
+    rejected: Rejected
 
 
 class PublicSettings(Model):
@@ -342,6 +370,7 @@ class PublicSettings(Model):
     record_frames: bool
     jpeg_quality: int
     max_upload_bytes: int
+    max_upload_pixels: int
     camera: str
     mavlink: str
     pad_size_m: float

@@ -18,7 +18,6 @@ import asyncio
 import contextlib
 import json
 import logging
-import secrets
 from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
@@ -30,12 +29,23 @@ from backend.encoder import EncodedFrame
 from backend.framebus import Slot
 from backend.services.status import Snapshot, to_json
 from backend.station import Station
+from backend.tokens import tokens_equal
 
 log = logging.getLogger(__name__)
 
+#: How long a socket may stay open without its auth message while viewing needs the token.
 AUTH_TIMEOUT_S = 5.0
+CLOSE_NORMAL = 1000
 CLOSE_UNSUPPORTED = 1003
-CLOSE_POLICY = 1008
+#: The token was missing, wrong or garbled (like HTTP 401); the dashboard asks for it.
+CLOSE_UNAUTHORIZED = 4401
+#: No auth message within AUTH_TIMEOUT_S (like HTTP 408).
+CLOSE_AUTH_TIMEOUT = 4408
+NEED_TOKEN_REASON = 'Viewing needs the operator token: send {"type": "auth", "token": "..."} first.'
+WRONG_TOKEN_REASON = "The operator token is wrong."
+AUTH_TIMEOUT_REASON = f"No auth message within {AUTH_TIMEOUT_S:g} s."
+#: Client messages are small (ping, subscribe, auth): anything longer is garbage.
+MAX_MESSAGE_CHARS = 4096
 EVENT_BACKLOG = 256
 
 
@@ -179,10 +189,19 @@ class Hub:
 
     # --- one connection ------------------------------------------------------------------------
     async def serve(self, ws: WebSocket) -> None:
-        """Handle one WebSocket from accept to close."""
+        """Handle one WebSocket from accept to close.
+
+        When viewing needs the token, the first message must be
+        ``{"type": "auth", "token": "..."}`` within :data:`AUTH_TIMEOUT_S`; nothing is
+        sent before it. Otherwise the state goes out at once, and an ``auth`` message
+        (the dashboard sends one whenever it has a token) is checked all the same.
+        """
         await ws.accept()
-        if self.station.runtime.view_requires_token and not await self._authenticate(ws):
-            return
+        if self.station.runtime.view_requires_token:
+            refusal = await self._authenticate(ws)
+            if refusal is not None:
+                await self._refuse(ws, *refusal)
+                return
         client = Client(ws)
         client.events.append(self.hello())
         client.wake.set()
@@ -202,33 +221,33 @@ class Hub:
             client.sender.cancel()
             with contextlib.suppress(asyncio.CancelledError, Exception):
                 await client.sender
-        if close is not None and ws.application_state == WebSocketState.CONNECTED:
-            with contextlib.suppress(Exception):
-                await ws.close(code=close[0], reason=close[1])
+        if close is not None:
+            await self._refuse(ws, *close)
 
-    async def _authenticate(self, ws: WebSocket) -> bool:
-        token = ws.query_params.get("token")
-        if token is None:
-            try:
-                first = await asyncio.wait_for(ws.receive_text(), AUTH_TIMEOUT_S)
-                token = json.loads(first).get("token") if first.startswith("{") else None
-            except (
-                TimeoutError,
-                json.JSONDecodeError,
-                AttributeError,
-                WebSocketDisconnect,
-                KeyError,
-                RuntimeError,
-            ):
-                token = None
-        if isinstance(token, str) and secrets.compare_digest(token, self.station.token):
-            return True
-        with contextlib.suppress(Exception):
-            await ws.close(
-                code=CLOSE_POLICY,
-                reason="Viewing needs the operator token: connect with ?token=<token>.",
-            )
-        return False
+    async def _refuse(self, ws: WebSocket, code: int, reason: str) -> None:
+        """Count and close (nothing else: a flood of garbage is a counter, not a log)."""
+        self.station.rejections.socket(reason)
+        if ws.application_state == WebSocketState.CONNECTED:
+            with contextlib.suppress(Exception):
+                await ws.close(code=code, reason=reason[:120])
+
+    async def _authenticate(self, ws: WebSocket) -> tuple[int, str] | None:
+        """None when the first message is a valid auth message, else the close."""
+        try:
+            message = await asyncio.wait_for(ws.receive(), AUTH_TIMEOUT_S)
+        except TimeoutError:
+            return CLOSE_AUTH_TIMEOUT, AUTH_TIMEOUT_REASON
+        if message["type"] == "websocket.disconnect":
+            return CLOSE_NORMAL, "left before authenticating"
+        return self._check_auth(_parse(message.get("text")))
+
+    def _check_auth(self, data: dict[str, Any] | str) -> tuple[int, str] | None:
+        if isinstance(data, str) or data.get("type") != "auth":
+            return CLOSE_UNAUTHORIZED, NEED_TOKEN_REASON
+        token = data.get("token")
+        if not isinstance(token, str) or not tokens_equal(token, self.station.token):
+            return CLOSE_UNAUTHORIZED, WRONG_TOKEN_REASON
+        return None
 
     async def _receive(self, client: Client) -> tuple[int, str] | None:
         """Read client messages until it leaves; a close (code, reason) on garbage."""
@@ -237,15 +256,11 @@ class Hub:
             message = await ws.receive()
             if message["type"] == "websocket.disconnect":
                 return None
-            text = message.get("text")
-            if text is None:
+            if message.get("text") is None:
                 return CLOSE_UNSUPPORTED, "Binary messages are not accepted; send JSON text."
-            try:
-                data = json.loads(text)
-            except json.JSONDecodeError:
-                return CLOSE_UNSUPPORTED, "Messages must be JSON objects with a 'type'."
-            if not isinstance(data, dict) or not isinstance(data.get("type"), str):
-                return CLOSE_UNSUPPORTED, "Messages must be JSON objects with a 'type'."
+            data = _parse(message["text"])
+            if isinstance(data, str):
+                return CLOSE_UNSUPPORTED, data
             kind = data["type"]
             if kind == "ping":
                 client.push_event('{"type":"pong"}')
@@ -256,6 +271,24 @@ class Hub:
                 client.threshold = threshold
                 self._refresh()
             elif kind == "auth":
-                continue  # already authorised (or viewing is open)
+                refusal = self._check_auth(data)
+                if refusal is not None:
+                    return refusal
             else:
-                return CLOSE_UNSUPPORTED, f"Unknown message type {kind[:40]!r}."
+                shown = kind[:40].encode("ascii", "backslashreplace").decode()
+                return CLOSE_UNSUPPORTED, f"Unknown message type {shown!r}."
+
+
+def _parse(text: str | None) -> dict[str, Any] | str:
+    """A client message as a dict with a string ``type``, or why it is not one."""
+    if text is None:
+        return "Binary messages are not accepted; send JSON text."
+    if len(text) > MAX_MESSAGE_CHARS:
+        return f"Messages are at most {MAX_MESSAGE_CHARS} characters."
+    try:
+        data = json.loads(text)
+    except (ValueError, RecursionError):
+        data = None
+    if not isinstance(data, dict) or not isinstance(data.get("type"), str):
+        return "Messages must be JSON objects with a 'type'."
+    return data

@@ -67,6 +67,7 @@ class LinkCore:
     _last_hb: float | None
     _rx_count: int
     _handler_errors: int
+    _implausible: int
     _last_error: str | None
     _streams: streams.StreamRequester
     _tracker: AckTracker

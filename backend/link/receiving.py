@@ -1,5 +1,6 @@
 """The link's reader thread: receive, cache the latest message per type, dispatch.
 
+A message whose values cannot be real (:mod:`.plausibility`) is dropped and counted.
 Each message goes to its handlers (a dict from type to handler, each isolated in its
 own try/except, so one bad message can never stall the link); a dropped transport is
 reopened with a back-off.
@@ -16,6 +17,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from backend.link.connection import Transport, TransportDropped
 from backend.link.core import _BACKOFF_S, LinkCore
+from backend.link.plausibility import implausible
 from backend.link.state import LinkState
 from backend.link.telemetry import STATUSTEXT_HISTORY, TELEMETRY_HANDLERS, StatusText
 
@@ -87,6 +89,13 @@ class LinkReceiver(LinkCore):
         if mtype == "BAD_DATA":
             return  # counted by the parser (receive_errors)
         self._rx_count += 1
+        problem = implausible(msg)
+        if problem is not None:  # well-formed, but not what any vehicle can be doing
+            self._implausible += 1
+            self._apply(
+                {"implausible": self._implausible, "last_implausible": f"{mtype}: {problem}"}
+            )
+            return
         src = (msg.get_srcSystem(), msg.get_srcComponent())
         now = time.monotonic()
         if mtype == "HEARTBEAT":

@@ -142,6 +142,9 @@ class Telemetry:
     heartbeat_age_s: float | None = None
     packets_lost_pct: float = 0.0
     handler_errors: int = 0
+    #: Messages dropped because their values cannot be real (link.plausibility).
+    implausible: int = 0
+    last_implausible: str | None = None
     reconnects: int = 0
     last_error: str | None = None
     # time stamps of the pose messages, for latency-aware consumers

@@ -153,6 +153,7 @@ class VehicleLink(LinkCommands, LinkReceiver, LinkHousekeeping):
         self._last_hb: float | None = None
         self._rx_count = 0
         self._handler_errors = 0
+        self._implausible = 0
         self._last_error: str | None = None
 
         self._streams = streams.StreamRequester()
@@ -244,6 +245,11 @@ class VehicleLink(LinkCommands, LinkReceiver, LinkHousekeeping):
     def state(self) -> LinkState:
         """The link state now."""
         return self._state
+
+    def flush_tlog(self) -> None:
+        """Push the session's .tlog to disk now (the link flushes it every second too)."""
+        if self._tlog is not None:
+            self._tlog.flush()
 
     @property
     def tlog_path(self) -> Path | None:

@@ -7,7 +7,8 @@ step has its result, as in the lockstep scenarios (a step without one would coun
 step without one, for the timeouts and failsafes. An abort wakes it at once. It stores the run
 (``mission_runs``: started at once, finished with the whole record), reports state
 changes as station events and hands a live snapshot to ``notify`` (the status
-service) at every step where something moved.
+service) at every step where something moved. The run's record so far is stored at
+each state change, so a crash leaves it as far as it went (:mod:`backend.recovery`).
 """
 
 from __future__ import annotations
@@ -215,6 +216,13 @@ class MissionManager:
         return snap
 
     def _on_change(self, mission: Mission) -> None:
+        run_id = self._run_id
+        if self.storage is not None and run_id is not None and mission is self._mission:
+            # What a crash leaves of this run is its record at the last state change.
+            try:
+                self.storage.checkpoint_mission_run(run_id, mission.record.to_dict())
+            except Exception:
+                log.exception("could not store the mission run so far")
         last = mission.record.states[-1] if mission.record.states else {}
         text = f"{mission.kind}: {mission.state}"
         if last.get("reason"):

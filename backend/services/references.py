@@ -145,6 +145,11 @@ class ReferenceService:
             reference = Reference.from_image(image_bgr, pad_size_m)
         except ValueError as exc:
             raise NoUsableH(str(exc)) from exc
+        except cv2.error as exc:
+            # The vision tripped over this picture (a fault of its own, logged for us);
+            # for the operator it is a picture that could not be measured.
+            log.warning("the vision failed on an uploaded picture: %s", str(exc).strip())
+            raise NoUsableH("The vision could not measure this picture.") from exc
         digest = hashlib.sha256(image_bgr.tobytes()).hexdigest()
         for row in self._storage.list_references():
             if row["data"].get("sha256") == digest and row["pad_size_m"] == float(pad_size_m):

@@ -68,6 +68,7 @@ class RuntimeSettings:
         return {
             **self._values,
             "max_upload_bytes": s.max_upload_bytes,
+            "max_upload_pixels": s.max_upload_pixels,
             "camera": s.camera,
             "mavlink": self.mavlink_url,
             "pad_size_m": s.pad_size,

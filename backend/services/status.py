@@ -24,6 +24,7 @@ from backend.camera import FrameSource
 from backend.missions.manager import MissionManager
 from backend.services.flights import FlightService
 from backend.services.references import ReferenceService
+from backend.services.rejections import Rejections
 from backend.services.vehicle import VehicleService
 from backend.vision_worker import VisionWorker
 
@@ -72,6 +73,7 @@ class StatusService:
         references: ReferenceService,
         flights: FlightService,
         viser_url: str | None,
+        rejections: Rejections,
     ) -> None:
         self._vehicle = vehicle
         self._source = source
@@ -80,6 +82,7 @@ class StatusService:
         self._references = references
         self._flights = flights
         self._viser_url = viser_url
+        self._rejections = rejections
         self._listeners: tuple[SnapshotListener, ...] = ()
         self._cond = threading.Condition()
         self._dirty = False
@@ -147,6 +150,7 @@ class StatusService:
                 "heartbeat_age_s": tel.heartbeat_age_s,
                 "msgs_per_s": tel.msgs_per_s,
                 "crc_errors": tel.crc_errors,
+                "implausible": tel.implausible,
             },
             "camera": {
                 "name": self._source.name,
@@ -161,6 +165,7 @@ class StatusService:
             "reference": self._references.active_summary(),
             "flight": self._flights.current,
             "viser_url": self._viser_url,
+            "rejected": self._rejections.to_dict(),
         }
 
     def build_telemetry(self) -> dict[str, Any]:

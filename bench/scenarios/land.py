@@ -152,7 +152,10 @@ class LockstepDriver:
         for name, hz in DEFAULT_STREAM_RATES_HZ.items():
             self.server.set_interval(name, 1.0 / hz)
         self.server.start()
-        self.raw = VehicleLink(self.server.address, heartbeat_timeout_s=10.0, stream_rates_hz={})
+        # Heartbeats come once a simulated second, however long that takes on a loaded
+        # machine: no wall-clock timeout may end the link (a stopped vehicle closes the
+        # TCP stream, which the link notices at once).
+        self.raw = VehicleLink(self.server.address, heartbeat_timeout_s=600.0, stream_rates_hz={})
         self.raw.start()
         self.link = LockstepLink(self.raw, self.server)
 
@@ -180,11 +183,12 @@ class LockstepDriver:
         return self.sim.time_s
 
     def advance(self, dt: float) -> None:
+        # Barrier before time moves: what the mission (or a test) sent is in the
+        # vehicle's inbox however late its reader thread gets the bytes from the socket
+        # (under load it may not have, and the vehicle would fly on the old targets).
+        self.link.sync()
         self.server.advance(dt)
         self.link.sync()
-
-    def after_step(self) -> None:
-        self.link.sync()  # what the mission sent is handled before time moves on
 
     def camera_pose(self, t: float) -> VehiclePose:
         truth = self.server.truth()
@@ -229,9 +233,6 @@ class RealtimeDriver:
     def advance(self, dt: float) -> None:
         self._next += dt
         time.sleep(max(0.0, self._next - time.monotonic()))
-
-    def after_step(self) -> None:
-        pass
 
     def camera_pose(self, t: float) -> VehiclePose | None:
         tel = self.raw.telemetry
@@ -292,7 +293,6 @@ def fly_to_start(driver: Any, spec: RunSpec, *, precland: bool | None = None) ->
     target = (spec.start_north_m, spec.start_east_m, -spec.start_alt_m)
     while True:
         link.goto_local_ned(*target, yaw_deg=spec.start_yaw_deg % 360.0)
-        driver.after_step()
         driver.advance(0.1)
         tel = link.telemetry
         p, v, a = tel.position_ned, tel.velocity_ned, tel.attitude
@@ -376,7 +376,6 @@ def _fly(
         mission.step(t, sample)
         if after_step is not None:
             after_step(driver, mission)
-        driver.after_step()
 
 
 def run_one(

@@ -4,8 +4,9 @@
 import "./styles.css";
 import { ApiClient } from "./lib/api";
 import { Store } from "./lib/store";
-import { extractToken, TokenKeeper } from "./lib/token";
-import { WsClient, wsUrlFor } from "./lib/ws-client";
+import { keepViewCookie } from "./lib/session";
+import { TokenKeeper, withoutTokenInAddress } from "./lib/token";
+import { CLOSE_AUTH_TIMEOUT, CLOSE_UNAUTHORIZED, WsClient, wsUrlFor } from "./lib/ws-client";
 import { mountCameraView } from "./widgets/camera-view";
 import { type Outcomes, mountControls } from "./widgets/controls";
 import { mountCornerMap } from "./widgets/corner-map";
@@ -29,22 +30,24 @@ function storage(): Storage | null {
 
 function start(): void {
   const tokens = new TokenKeeper(storage());
-  const { token, cleaned } = extractToken(window.location.href);
-  if (token) {
-    tokens.set(token);
-    // keep the secret out of the address bar and the history
-    window.history.replaceState(null, "", cleaned);
-  }
+  // A token left in the address (an old bookmark) is removed, never used.
+  const cleaned = withoutTokenInAddress(window.location.href);
+  if (cleaned) window.history.replaceState(null, "", cleaned);
   const store = new Store();
   const api = new ApiClient({ token: () => tokens.get() });
-  const ws = new WsClient({ url: () => wsUrlFor(window.location, tokens.get()) });
+  const ws = new WsClient({ url: () => wsUrlFor(window.location), auth: () => tokens.usable() });
+  keepViewCookie(tokens, api);
   ws.onState((s) => {
     store.setConnection(s);
-    // 1008: the server wants the operator token before it shows anything
-    if (s === "reconnecting" && ws.stats.lastError.includes("1008")) {
+    if (s !== "reconnecting") return;
+    const code = ws.stats.lastCloseCode;
+    if (code === CLOSE_UNAUTHORIZED) tokens.markRefused(); // offered no more until a new one
+    if (code === CLOSE_UNAUTHORIZED || code === CLOSE_AUTH_TIMEOUT) {
       document.dispatchEvent(new CustomEvent("visland:need-token"));
     }
   });
+  // a new token applies at once: reconnect so the socket authenticates with it
+  tokens.onChange(() => ws.restart());
   ws.onMessage((m) => store.apply(m));
   ws.onBinary((f) => store.applyImage(f));
   const ctx: Ctx = { store, api, ws, tokens };

@@ -51,9 +51,15 @@ def test_start_run_stop_leaves_no_threads(tmp_path):
     finally:
         station.stop()
     station.stop()  # idempotent
-    time.sleep(0.3)
-    left = [t for t in threading.enumerate() if t.ident not in before and t.is_alive()]
-    assert not left, [t.name for t in left]
+
+    def left() -> list[str]:
+        return [t.name for t in threading.enumerate() if t.ident not in before and t.is_alive()]
+
+    # threads end as they finish their last loop (each has joined or timed out)
+    try:
+        wait_for(lambda: not left(), 20)
+    except AssertionError:
+        raise AssertionError(f"threads left running: {left()}") from None
 
 
 def test_an_unreachable_vehicle_shows_and_commands_fail_at_once(tmp_path):
@@ -67,10 +73,9 @@ def test_an_unreachable_vehicle_shows_and_commands_fail_at_once(tmp_path):
     try:
         assert station.stand_in is None
         assert station.status.build_status()["link"]["state"] in ("connecting", "lost")
-        t0 = time.monotonic()
-        result = station.vehicle.command("arm")
+        result = station.vehicle.command("arm")  # at once: nothing is waited for
         assert not result.ok and result.result_name == "LINK_DOWN"
-        assert time.monotonic() - t0 < 1.0
+        assert "nothing was sent" in result.detail
         assert station.status.build_status()["camera"]["frames"] == 0  # no pose, no picture
     finally:
         station.stop()
@@ -111,26 +116,24 @@ def test_token_file_is_made_when_no_token_is_given(tmp_path):
 
 
 @pytest.mark.parametrize(
-    ("data", "kind"),
-    [
-        (b"\x89PNG\r\n\x1a\nxx", "png"),
-        (b"\xff\xd8\xff\xe0", "jpeg"),
-        (b"BMxxxx", "bmp"),
-        (b"RIFF\x00\x00\x00\x00WEBPVP8 ", "webp"),
-        (b"II*\x00", "tiff"),
-        (b"GIF89a", None),
-        (b"", None),
-    ],
+    ("ext", "kind"),
+    [(".png", "png"), (".jpg", "jpeg"), (".bmp", "bmp"), (".webp", "webp"), (".tiff", "tiff")],
 )
-def test_sniff(data, kind):
-    assert sniff_image(data) == kind
+def test_sniff(ext, kind):
+    _ok, buf = cv2.imencode(ext, make_pad_image(64))
+    assert sniff_image(buf.tobytes()) == kind
+    assert sniff_image(buf.tobytes()[:6]) is None  # a header cut short is no picture
+    assert sniff_image(b"GIF89a") is None and sniff_image(b"") is None
 
 
 def test_decode_refuses_non_pictures():
     with pytest.raises(UnsupportedImage, match="not a picture"):
         decode_image(b"plain text")
-    with pytest.raises(UnsupportedImage, match="cannot be decoded"):
+    with pytest.raises(UnsupportedImage, match="IHDR"):
         decode_image(b"\x89PNG\r\n\x1a\n" + b"\x00" * 64)
+    _ok, buf = cv2.imencode(".png", make_pad_image(100))
+    with pytest.raises(UnsupportedImage, match="cannot be decoded"):
+        decode_image(buf.tobytes()[:200])
     _ok, buf = cv2.imencode(".jpg", make_pad_image(100))
     assert decode_image(buf.tobytes()).shape == (100, 100, 3)
 

@@ -23,7 +23,7 @@ def free_port() -> int:
 
 
 @pytest.mark.slow
-def test_serve_prints_urls_and_token_runs_and_stops_on_sigint(tmp_path):
+def test_serve_prints_urls_runs_and_stops_on_sigint(tmp_path):
     port, viser_port = free_port(), free_port()
     env = {**os.environ, "VISLAND_SIM_READY_AFTER": "0.1", "PYTHONUNBUFFERED": "1"}
     proc = subprocess.Popen(
@@ -50,8 +50,9 @@ def test_serve_prints_urls_and_token_runs_and_stops_on_sigint(tmp_path):
         text = "".join(lines)
         token = (tmp_path / "token").read_text().strip()
         assert f"dashboard  http://127.0.0.1:{port}" in text
-        assert f"3D view    http://127.0.0.1:{viser_port}" in text
-        assert token in text and str(tmp_path / "token") in text
+        assert f"3D view    http://127.0.0.1:{port}/view3d/" in text
+        # Into a pipe (a log, a service's journal) the token is not printed: only where.
+        assert token not in text and str(tmp_path / "token") in text
         deadline = time.monotonic() + 30
         while True:
             try:
@@ -63,8 +64,8 @@ def test_serve_prints_urls_and_token_runs_and_stops_on_sigint(tmp_path):
                 time.sleep(0.2)
         assert r.json()["ok"] is True
         status = httpx.get(f"http://127.0.0.1:{port}/api/status", timeout=5).json()
-        assert status["viser_url"] == f"http://127.0.0.1:{viser_port}"
-        assert httpx.get(status["viser_url"], timeout=5).status_code == 200
+        assert status["viser_url"] == "/view3d/"
+        assert httpx.get(f"http://127.0.0.1:{port}/view3d/", timeout=5).status_code == 200
         r = httpx.post(f"http://127.0.0.1:{port}/api/vehicle/arm", timeout=5)
         assert r.status_code == 401
     finally:
@@ -121,3 +122,14 @@ def test_bad_flags_are_refused_before_anything_starts(tmp_path, args, words):
     )
     assert out.returncode == 2 and words in out.stderr
     assert not (tmp_path / "visland.db").exists()
+
+
+def test_the_token_is_shown_only_on_a_terminal(tmp_path, monkeypatch):
+    from backend.__main__ import _token_line
+
+    path = tmp_path / "token"
+    monkeypatch.setattr(sys.stdout, "isatty", lambda: True)
+    assert _token_line("s3cret-token-value", path).startswith("s3cret-token-value")
+    monkeypatch.setattr(sys.stdout, "isatty", lambda: False)
+    line = _token_line("s3cret-token-value", path)
+    assert "s3cret" not in line and str(path) in line

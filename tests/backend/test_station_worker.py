@@ -62,7 +62,8 @@ class Collector:
             self.got.append(item)
 
 
-def run_worker(source, reference, seconds, **kw):
+def run_worker(source, reference, until, timeout=30.0, **kw):
+    """Run the worker until ``until(worker, got)`` holds (or ``timeout`` s pass)."""
     bus = FrameBus("results")
     worker = VisionWorker(
         source, bus, reference=lambda: reference, camera=CAMERA, process=process_frame, **kw
@@ -72,17 +73,24 @@ def run_worker(source, reference, seconds, **kw):
     source.start()
     worker.start()
     try:
-        time.sleep(seconds)
+        deadline = time.monotonic() + timeout
+        while not until(worker, got) and time.monotonic() < deadline:
+            time.sleep(0.01)
     finally:
         worker.close()
         source.close()
     return worker, got
 
 
+def results(n):
+    """``until``: the worker published ``n`` results."""
+    return lambda worker, got: len(got) >= n
+
+
 def test_processes_frames_and_finds_the_pad(pad_frame):
     reference, frame = pad_frame
     worker, got = run_worker(
-        RenderedSource(frame, 10), reference, 1.0, hints=lambda: {"yaw_hint": 20.0}
+        RenderedSource(frame, 10), reference, results(3), hints=lambda: {"yaw_hint": 20.0}
     )
     assert len(got) >= 3
     assert all(p.result.detected for p in got)
@@ -97,7 +105,8 @@ def test_processes_frames_and_finds_the_pad(pad_frame):
 def test_a_fast_camera_drops_frames_and_counts_them(pad_frame):
     reference, frame = pad_frame
     source = RenderedSource(frame, 400)  # far faster than the pipeline
-    worker, got = run_worker(source, reference, 1.0)
+    # until the camera has sent far more frames than were processed
+    worker, got = run_worker(source, reference, lambda w, g: len(g) >= 3 and w.stats.dropped > 10)
     stats = worker.stats
     seqs = [p.frame.seq for p in got]
     assert seqs == sorted(seqs)
@@ -132,7 +141,9 @@ def test_a_consumer_that_never_takes_holds_nothing_up(pad_frame):
 
 def test_no_reference_means_no_processing(pad_frame):
     _, frame = pad_frame
-    worker, got = run_worker(RenderedSource(frame, 50), None, 0.3)
+    # 20 frames were offered (an absence needs some time: here the camera's)
+    source = RenderedSource(frame, 50)
+    worker, got = run_worker(source, None, lambda w, g: source.status.frames >= 20)
     assert got == [] and worker.stats.processed == 0
 
 
@@ -141,14 +152,15 @@ def test_frames_of_another_size_use_the_scaled_camera(pad_frame):
     import cv2
 
     small = cv2.resize(frame, (320, 240), interpolation=cv2.INTER_AREA)
-    _, got = run_worker(RenderedSource(small, 10), reference, 0.8, hints=lambda: {"yaw_hint": 20.0})
+    _, got = run_worker(
+        RenderedSource(small, 10), reference, results(1), hints=lambda: {"yaw_hint": 20.0}
+    )
     assert got and got[-1].camera.width == 320 and got[-1].result.detected
 
 
 def test_close_joins_the_thread(pad_frame):
     reference, frame = pad_frame
     before = threading.active_count()
-    worker, _ = run_worker(RenderedSource(frame, 30), reference, 0.2)
+    worker, _ = run_worker(RenderedSource(frame, 30), reference, results(1))
     worker.close()  # idempotent
-    time.sleep(0.1)
     assert threading.active_count() <= before

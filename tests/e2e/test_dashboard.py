@@ -265,7 +265,11 @@ def page(browser) -> Iterator[object]:
 
 
 def open_dashboard(page, station: Station, *, token: str | None = TOKEN) -> None:
-    page.goto(station.url + (f"/?token={token}" if token else "/"))
+    """The dashboard, with the token the operator entered before (kept by the page in
+    localStorage: it never travels in a URL)."""
+    if token:
+        page.add_init_script(f"localStorage.setItem('visland.token', {json.dumps(token)})")
+    page.goto(station.url + "/")
     expect(page.get_by_test_id("server-state")).to_have_text("server connected", timeout=15_000)
 
 
@@ -323,7 +327,7 @@ def test_page_loads_with_every_panel(page, station: Station) -> None:
         "abort",
     ):
         expect(page.get_by_test_id(testid)).to_be_visible()
-    # the token came from the URL, was kept, and left the address bar
+    # the token is kept by the page, and never shows in the address bar
     expect(page.get_by_test_id("token-state")).to_have_text("token set")
     assert "token=" not in page.url
     # the 3D view is embedded from the URL the server gives

@@ -605,15 +605,24 @@ def test_target_is_lost_two_seconds_after_the_last_measurement(rig: Rig) -> None
 
 
 # ---------------------------------------------------------------------- robustness
+def _wait(predicate, timeout: float = 10.0) -> bool:
+    """Poll ``predicate`` until it holds (the server's reader thread is its own)."""
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.005)
+    return True
+
+
 def test_garbage_and_truncated_packets_do_not_break_the_link(rig: Rig) -> None:
     sock = rig.m.port
     sock.sendall(os.urandom(3000))
     good = rig.m.mav.param_request_read_encode(1, 1, b"SYSID_MYGCS", -1).pack(rig.m.mav)
     sock.sendall(b"\xfd\x09\x00" + good[:7])  # a truncated frame, then noise
     sock.sendall(bytes(range(256)))
-    time.sleep(0.2)
+    assert _wait(lambda: rig.server.bad_packets > 0)  # parsed by the server's reader
     rig.server.advance(0.05)
-    assert rig.server.bad_packets > 0
     assert rig.server.running
     # A fresh connection is served normally.
     m2 = mavutil.mavlink_connection(rig.server.address, source_system=255, autoreconnect=False)
@@ -739,9 +748,9 @@ def test_signed_link_ignores_unsigned_commands() -> None:
     m = mavutil.mavlink_connection(server.address, source_system=255, autoreconnect=False)
     try:
         m.mav.param_request_read_send(1, 1, b"SYSID_MYGCS", -1)
-        time.sleep(0.2)
+        assert _wait(lambda: server.bad_packets >= 1)  # the unsigned request, dropped
         server.advance(0.2)
-        assert server.bad_packets >= 1 and server.messages_received == 0
+        assert server.messages_received == 0
         m.setup_signing(key, sign_outgoing=True)
         m.mav.param_request_read_send(1, 1, b"SYSID_MYGCS", -1)
         assert server.wait_inbound(1)

@@ -7,12 +7,12 @@ Commands need the operator token and answer in the vehicle routes' shape (``ok``
 
 from __future__ import annotations
 
-import math
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Body, HTTPException, status
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import Field
 
+from backend.api.bodies import StrictBody
 from backend.api.deps import MissionsDep, Operator, RunId, VehicleDep, Viewer
 from backend.api.errors import OPERATOR_ERRORS, VIEWER_ERRORS, errors
 from backend.api.schemas import MissionCommand, MissionRun, MissionRunSummary, MissionSnapshot
@@ -25,28 +25,17 @@ router = APIRouter(prefix="/missions", tags=["missions"])
 _COMMAND_ERRORS = {**OPERATOR_ERRORS, **errors(409, 422)}
 
 
-class _Finite(BaseModel):
-    model_config = ConfigDict(extra="forbid")
-
-    @field_validator("*")
-    @classmethod
-    def _finite(cls, value: object) -> object:
-        if isinstance(value, float) and not math.isfinite(value):
-            raise ValueError("must be a finite number")
-        return value
-
-
-class HoverRequest(_Finite):
-    altitude_m: float = Field(4.0, gt=0, le=100, description="hover height above home (m)")
+class HoverRequest(StrictBody):
+    altitude_m: float = Field(4.0, ge=1, le=100, description="hover height above home (m)")
     hold_s: float = Field(20.0, gt=0, le=3600, description="how long to hold over the pad")
     abort_mode: Literal["LOITER", "RTL"] = "LOITER"
 
 
-class LandRequest(_Finite):
+class LandRequest(StrictBody):
     strategy: Literal["plnd", "guided"] = "plnd"
     approach_alt_m: float | None = Field(
         None,
-        gt=0,
+        ge=1,
         le=50,
         description="height to look for the pad from; by default a margin under where "
         "the active pad is still reliably found with this camera",

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from functools import partial
 from pathlib import PurePath
 from typing import Annotated, Any, Literal
 
@@ -12,7 +13,7 @@ from fastapi.responses import FileResponse
 from backend.api.deps import Operator, ReferencesDep, RefId, RuntimeDep, Viewer
 from backend.api.errors import OPERATOR_ERRORS, VIEWER_ERRORS, errors
 from backend.api.schemas import ReferenceSummary
-from backend.imaging import UnsupportedImage, decode_image
+from backend.imaging import TooManyPixels, UnsupportedImage, decode_image
 from backend.services.references import NoUsableH
 from backend.settings import MAX_PAD_SIZE_M
 
@@ -46,21 +47,29 @@ async def upload_reference(
     references: ReferencesDep,
     runtime: RuntimeDep,
     file: Annotated[UploadFile, File(description="a top-down picture of the pad")],
-    pad_size_m: Annotated[float, Form(gt=0, le=MAX_PAD_SIZE_M, description="pad width, m")],
+    pad_size_m: Annotated[
+        float, Form(gt=0, le=MAX_PAD_SIZE_M, allow_inf_nan=False, description="pad width, m")
+    ],
 ) -> dict[str, Any]:
     """Measure the H on the picture and make it the active reference.
 
-    413 over the size limit, 415 not a picture, 422 no usable H (the pipeline's reason).
+    413 over the size limit (bytes, or pixels as the picture's header gives them: nothing
+    that large is decoded), 415 not a picture, 422 no usable H (the pipeline's reason).
     The previous reference stays active on any failure.
     """
-    data = await read_limited(file, int(runtime.public()["max_upload_bytes"]))
+    limits = runtime.public()
+    data = await read_limited(file, int(limits["max_upload_bytes"]))
     if not data:
         raise HTTPException(status.HTTP_415_UNSUPPORTED_MEDIA_TYPE, "The file is empty.")
     name = PurePath(file.filename or "upload").name[:120] or "upload"
     try:
-        image = await run_in_threadpool(decode_image, data)
+        image = await run_in_threadpool(
+            partial(decode_image, max_pixels=int(limits["max_upload_pixels"])), data
+        )
+    except TooManyPixels as exc:
+        raise HTTPException(status.HTTP_413_CONTENT_TOO_LARGE, str(exc)) from None
     except UnsupportedImage as exc:
-        raise HTTPException(status.HTTP_415_UNSUPPORTED_MEDIA_TYPE, str(exc)) from exc
+        raise HTTPException(status.HTTP_415_UNSUPPORTED_MEDIA_TYPE, str(exc)) from None
     try:
         return await run_in_threadpool(references.add, image, name, pad_size_m)
     except NoUsableH as exc:

@@ -5,8 +5,9 @@ from __future__ import annotations
 from typing import Any
 
 from fastapi import APIRouter
-from pydantic import BaseModel, ConfigDict, Field, StrictBool
+from pydantic import Field
 
+from backend.api.bodies import StrictBody
 from backend.api.deps import Operator, RuntimeDep, Viewer
 from backend.api.errors import OPERATOR_ERRORS, VIEWER_ERRORS, errors
 from backend.api.schemas import PublicSettings
@@ -14,14 +15,12 @@ from backend.api.schemas import PublicSettings
 router = APIRouter(tags=["settings"])
 
 
-class SettingsUpdate(BaseModel):
+class SettingsUpdate(StrictBody):
     """Only the fields given change; unknown fields are refused."""
 
-    model_config = ConfigDict(extra="forbid")
-
-    view_requires_token: StrictBool | None = None
-    record_frames: StrictBool | None = None
-    jpeg_quality: int | None = Field(None, ge=10, le=100, strict=True)
+    view_requires_token: bool | None = None
+    record_frames: bool | None = None
+    jpeg_quality: int | None = Field(None, ge=10, le=100)
 
 
 @router.get(

@@ -7,12 +7,11 @@ without the operator token.
 
 from __future__ import annotations
 
-import math
-
 from fastapi import APIRouter
 from fastapi.responses import JSONResponse
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import Field, field_validator
 
+from backend.api.bodies import StrictBody
 from backend.api.deps import Operator, VehicleDep
 from backend.api.errors import OPERATOR_ERRORS, command_errors, errors
 from backend.api.schemas import CommandResult
@@ -29,33 +28,27 @@ router = APIRouter(
     responses={**OPERATOR_ERRORS, **command_errors(409, 503, 504), **errors(422)},
 )
 
+MIN_TAKEOFF_M = 1.0
 MAX_TAKEOFF_M = 100.0
 
 
-class Takeoff(BaseModel):
-    model_config = ConfigDict(extra="forbid")
-    altitude_m: float = Field(gt=0, le=MAX_TAKEOFF_M, description="metres above home")
-
-    @field_validator("altitude_m")
-    @classmethod
-    def _finite(cls, value: float) -> float:
-        if not math.isfinite(value):
-            raise ValueError("altitude_m must be a finite number")
-        return value
+class Takeoff(StrictBody):
+    altitude_m: float = Field(
+        ge=MIN_TAKEOFF_M, le=MAX_TAKEOFF_M, description="metres above home (1 to 100)"
+    )
 
 
-class Mode(BaseModel):
-    model_config = ConfigDict(extra="forbid")
-    mode: str = Field(description="an ArduCopter mode name, e.g. GUIDED")
+class Mode(StrictBody):
+    mode: str = Field(max_length=40, description="an ArduCopter mode name, e.g. GUIDED")
 
     @field_validator("mode")
     @classmethod
     def _known(cls, value: str) -> str:
         name = value.strip().upper()
         if name not in COPTER_MODES.values():
+            shown = value[:30].encode("ascii", "backslashreplace").decode()
             raise ValueError(
-                f"unknown mode {value[:30]!r}; ArduCopter modes: "
-                + ", ".join(COPTER_MODES.values())
+                f"unknown mode {shown!r}; ArduCopter modes: " + ", ".join(COPTER_MODES.values())
             )
         return name
 

@@ -297,7 +297,8 @@ export interface paths {
          * Upload Reference
          * @description Measure the H on the picture and make it the active reference.
          *
-         *     413 over the size limit, 415 not a picture, 422 no usable H (the pipeline's reason).
+         *     413 over the size limit (bytes, or pixels as the picture's header gives them: nothing
+         *     that large is decoded), 415 not a picture, 422 no usable H (the pipeline's reason).
          *     The previous reference stays active on any failure.
          */
         post: operations["upload_reference_api_reference_post"];
@@ -353,6 +354,31 @@ export interface paths {
         put?: never;
         post?: never;
         delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/session": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Open Session
+         * @description Set a view cookie (HttpOnly, SameSite=Strict): the dashboard's pictures and 3D
+         *     view may then be seen while viewing needs the token. It never commands anything.
+         */
+        post: operations["open_session_api_session_post"];
+        /**
+         * Close Session
+         * @description Forget this browser's view cookie.
+         */
+        delete: operations["close_session_api_session_delete"];
         options?: never;
         head?: never;
         patch?: never;
@@ -551,7 +577,10 @@ export interface components {
             /** Yawspeed */
             yawspeed: number | null;
         };
-        /** AuthMessage */
+        /**
+         * AuthMessage
+         * @description The first message: the operator token (never in the socket's URL).
+         */
         AuthMessage: {
             /** Token */
             token: string;
@@ -945,6 +974,11 @@ export interface components {
             crc_errors: number;
             /** Heartbeat Age S */
             heartbeat_age_s: number | null;
+            /**
+             * Implausible
+             * @description telemetry messages dropped because their values cannot be real
+             */
+            implausible: number;
             /** Msgs Per S */
             msgs_per_s: number | null;
             /**
@@ -1250,6 +1284,8 @@ export interface components {
             mavlink: string;
             /** Max Upload Bytes */
             max_upload_bytes: number;
+            /** Max Upload Pixels */
+            max_upload_pixels: number;
             /** Pad Heading Deg */
             pad_heading_deg: number;
             /** Pad Size M */
@@ -1304,6 +1340,24 @@ export interface components {
             verifier: components["schemas"]["VerifierStatus"];
         };
         /**
+         * Rejected
+         * @description What the station refused at its edge since it started (counted, never a crash).
+         */
+        Rejected: {
+            /** Last Reason */
+            last_reason: string;
+            /**
+             * Requests
+             * @description HTTP requests refused for their Host, Origin or site, or a token in the URL
+             */
+            requests: number;
+            /**
+             * Sockets
+             * @description WebSockets refused or closed: Host, Origin, a missing or wrong token, garbage messages
+             */
+            sockets: number;
+        };
+        /**
          * SettingsUpdate
          * @description Only the fields given change; unknown fields are refused.
          */
@@ -1335,7 +1389,11 @@ export interface components {
             mission: components["schemas"]["MissionSnapshot"] | null;
             pipeline: components["schemas"]["PipelineStatus"];
             reference: components["schemas"]["ReferenceSummary"] | null;
-            /** Viser Url */
+            rejected: components["schemas"]["Rejected"];
+            /**
+             * Viser Url
+             * @description where the dashboard finds the 3D view (a path on this station)
+             */
             viser_url: string | null;
         };
         /** StatusMessage */
@@ -1346,12 +1404,16 @@ export interface components {
             mission: components["schemas"]["MissionSnapshot"] | null;
             pipeline: components["schemas"]["PipelineStatus"];
             reference: components["schemas"]["ReferenceSummary"] | null;
+            rejected: components["schemas"]["Rejected"];
             /**
              * Type
              * @constant
              */
             type: "status";
-            /** Viser Url */
+            /**
+             * Viser Url
+             * @description where the dashboard finds the 3D view (a path on this station)
+             */
             viser_url: string | null;
         };
         /** StatusText */
@@ -1380,7 +1442,7 @@ export interface components {
         Takeoff: {
             /**
              * Altitude M
-             * @description metres above home
+             * @description metres above home (1 to 100)
              */
             altitude_m: number;
         };
@@ -1408,10 +1470,17 @@ export interface components {
             heading_deg: number | null;
             /** Heartbeat Age S */
             heartbeat_age_s: number | null;
+            /**
+             * Implausible
+             * @description messages dropped: their values cannot be real
+             */
+            implausible: number;
             /** Landing Targets Sent */
             landing_targets_sent: number;
             /** Last Error */
             last_error: string | null;
+            /** Last Implausible */
+            last_implausible: string | null;
             last_landing_target: components["schemas"]["LandingTargetSent"] | null;
             /** Local Position Rx Monotonic */
             local_position_rx_monotonic: number | null;
@@ -1468,10 +1537,17 @@ export interface components {
             heading_deg: number | null;
             /** Heartbeat Age S */
             heartbeat_age_s: number | null;
+            /**
+             * Implausible
+             * @description messages dropped: their values cannot be real
+             */
+            implausible: number;
             /** Landing Targets Sent */
             landing_targets_sent: number;
             /** Last Error */
             last_error: string | null;
+            /** Last Implausible */
+            last_implausible: string | null;
             last_landing_target: components["schemas"]["LandingTargetSent"] | null;
             /** Local Position Rx Monotonic */
             local_position_rx_monotonic: number | null;
@@ -1550,6 +1626,16 @@ export interface components {
              * @enum {string}
              */
             state: "off" | "queued" | "training" | "ready" | "unavailable" | "failed";
+        };
+        /**
+         * ViewSession
+         * @description Whether this browser holds a view cookie now (``POST``/``DELETE /api/session``).
+         */
+        ViewSession: {
+            /** Detail */
+            detail: string;
+            /** View Cookie */
+            view_cookie: boolean;
         };
     };
     responses: never;
@@ -2442,7 +2528,7 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorResponse"];
                 };
             };
-            /** @description The upload is larger than the limit. */
+            /** @description The upload is larger than the limit (in bytes, or in pixels by its header). */
             413: {
                 headers: {
                     [name: string]: unknown;
@@ -2636,6 +2722,100 @@ export interface operations {
                 };
             };
             /** @description The input is invalid (one sentence says why). */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The link to the vehicle is down, or the station is not running. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+        };
+    };
+    open_session_api_session_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ViewSession"];
+                };
+            };
+            /** @description The operator token is missing or wrong. */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The link to the vehicle is down, or the station is not running. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+        };
+    };
+    close_session_api_session_delete: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ViewSession"];
+                };
+            };
+            /** @description The operator token is missing or wrong. */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description Validation Error */
             422: {
                 headers: {
                     [name: string]: unknown;

@@ -1,5 +1,7 @@
-// The operator token: taken once from the page URL (?token= or #token=, then removed
-// from the address bar so it is not left in the history) and kept in localStorage.
+// The operator token: typed (or pasted) into the dashboard, kept in localStorage, and
+// sent only in the Authorization header and as the WebSocket's first message. Never in
+// a URL: URLs end up in logs and the browser's history. A token the server refused is
+// not offered again until a new one is set.
 
 export interface KeyValueStore {
   getItem(key: string): string | null;
@@ -9,27 +11,39 @@ export interface KeyValueStore {
 
 const KEY = "visland.token";
 
-/** Pull a token out of a URL; returns it and the URL without it. */
-export function extractToken(href: string): { token: string | null; cleaned: string } {
+/**
+ * The address without any `token` parameter (query or hash), or null when it has none.
+ * The dashboard never takes a token from its address; it only removes one left there.
+ */
+export function withoutTokenInAddress(href: string): string | null {
   const url = new URL(href);
-  let token = url.searchParams.get("token");
-  if (token !== null) url.searchParams.delete("token");
-  if (url.hash.startsWith("#")) {
+  let changed = false;
+  for (const key of [...url.searchParams.keys()]) {
+    if (key.trim().toLowerCase() === "token") {
+      url.searchParams.delete(key);
+      changed = true;
+    }
+  }
+  if (url.hash.length > 1) {
     const hash = new URLSearchParams(url.hash.slice(1));
-    const fromHash = hash.get("token");
-    if (fromHash !== null) {
-      token = token ?? fromHash;
-      hash.delete("token");
+    for (const key of [...hash.keys()]) {
+      if (key.trim().toLowerCase() === "token") {
+        hash.delete(key);
+        changed = true;
+      }
+    }
+    if (changed) {
       const rest = hash.toString();
       url.hash = rest ? `#${rest}` : "";
     }
   }
-  token = token?.trim() || null;
-  return { token, cleaned: url.toString() };
+  return changed ? url.toString() : null;
 }
 
 export class TokenKeeper {
   private value: string | null;
+  private refused = false;
+  private readonly listeners = new Set<(token: string | null) => void>();
 
   constructor(private readonly storage: KeyValueStore | null) {
     this.value = safeGet(storage);
@@ -39,21 +53,43 @@ export class TokenKeeper {
     return this.value;
   }
 
+  /** The token to offer the server: none once it said this one is wrong. */
+  usable(): string | null {
+    return this.refused ? null : this.value;
+  }
+
+  /** The server said the token is wrong: stop offering it until a new one is set. */
+  markRefused(): void {
+    this.refused = true;
+  }
+
+  get isRefused(): boolean {
+    return this.refused && this.value !== null;
+  }
+
   set(token: string | null): void {
     const clean = token?.trim() || null;
     this.value = clean;
+    this.refused = false;
     try {
       if (clean) this.storage?.setItem(KEY, clean);
       else this.storage?.removeItem(KEY);
     } catch {
       // storage may be disabled (private mode): the token stays for this page only
     }
+    for (const cb of this.listeners) cb(clean);
+  }
+
+  /** Call `cb(token)` whenever a token is set or cleared; returns the remover. */
+  onChange(cb: (token: string | null) => void): () => void {
+    this.listeners.add(cb);
+    return () => this.listeners.delete(cb);
   }
 }
 
 function safeGet(storage: KeyValueStore | null): string | null {
   try {
-    return storage?.getItem(KEY) ?? null;
+    return storage?.getItem(KEY)?.trim() || null;
   } catch {
     return null;
   }

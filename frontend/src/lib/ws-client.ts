@@ -1,6 +1,9 @@
 // The one WebSocket to the server: reconnects by itself with capped exponential
 // backoff, tells text messages from binary frames, and notices a silent socket
-// (the server sends telemetry at 10 Hz, so silence means a dead connection).
+// (the server sends telemetry at 10 Hz, so silence means a dead connection). The
+// operator token, when there is one, is the first message on each socket (never in
+// the URL); the server closes with 4401 (missing or wrong token) or 4408 (no auth
+// message in time) when viewing needs it.
 
 import {
   type BinaryFrame,
@@ -27,8 +30,10 @@ export type SocketFactory = (url: string) => SocketLike;
 export type ConnectionState = "idle" | "connecting" | "open" | "reconnecting" | "stopped";
 
 export interface WsClientOptions {
-  /** The URL, or a function giving it at each (re)connect (so a new token applies). */
+  /** The URL, or a function giving it at each (re)connect. */
   url: string | (() => string);
+  /** The token to send first on each socket (null: none), asked at each (re)connect. */
+  auth?: () => string | null;
   factory?: SocketFactory;
   /** First reconnect delay; doubles up to maxDelayMs, reset when a socket opens. */
   minDelayMs?: number;
@@ -47,7 +52,13 @@ export interface WsStats {
   protocolErrors: number;
   reconnects: number;
   lastError: string;
+  /** The close code of the last socket that closed (0 before any). */
+  lastCloseCode: number;
 }
+
+/** Close codes of the server's auth handshake. */
+export const CLOSE_UNAUTHORIZED = 4401;
+export const CLOSE_AUTH_TIMEOUT = 4408;
 
 const OPEN = 1;
 
@@ -56,13 +67,9 @@ function defaultFactory(url: string): SocketLike {
 }
 
 /** Where /ws lives for a page served from `location` (http -> ws, https -> wss). */
-export function wsUrlFor(
-  location: { protocol: string; host: string },
-  token?: string | null,
-): string {
+export function wsUrlFor(location: { protocol: string; host: string }): string {
   const scheme = location.protocol === "https:" ? "wss:" : "ws:";
-  const query = token ? `?token=${encodeURIComponent(token)}` : "";
-  return `${scheme}//${location.host}/ws${query}`;
+  return `${scheme}//${location.host}/ws`;
 }
 
 export class WsClient {
@@ -72,6 +79,7 @@ export class WsClient {
     protocolErrors: 0,
     reconnects: 0,
     lastError: "",
+    lastCloseCode: 0,
   };
   private socket: SocketLike | null = null;
   private stateValue: ConnectionState = "idle";
@@ -149,6 +157,13 @@ export class WsClient {
     }
   }
 
+  /** Close the socket and open a new one now (e.g. to authenticate with a new token). */
+  restart(): void {
+    if (this.stateValue === "idle" || this.stateValue === "stopped") return;
+    this.stop();
+    this.start();
+  }
+
   /** Ask for (or stop) threshold mask frames; remembered across reconnects. */
   setThreshold(on: boolean): void {
     this.threshold = on;
@@ -190,6 +205,9 @@ export class WsClient {
       if (this.socket !== socket) return;
       this.attempts = 0;
       this.lastReceive = Date.now();
+      // First message: the token (the server waits for it when viewing needs it).
+      const token = this.options.auth?.() ?? null;
+      if (token) this.send({ type: "auth", token });
       this.setState("open");
       if (this.threshold) this.send({ type: "subscribe", threshold: true });
       this.startPing();
@@ -207,6 +225,7 @@ export class WsClient {
       if (this.socket !== socket) return;
       this.socket = null;
       detach(socket);
+      this.stats.lastCloseCode = ev.code;
       if (ev.code !== 1000 && ev.code !== 1005) {
         this.stats.lastError = `closed with code ${ev.code}${ev.reason ? `: ${ev.reason}` : ""}`;
       }

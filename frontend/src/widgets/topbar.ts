@@ -27,8 +27,9 @@ export function mountTopbar(root: HTMLElement, ctx: Ctx, outcomes: () => Outcome
   const tokenSave = h("button", { class: "btn btn-ghost btn-small", type: "button", "data-testid": "token-save" }, "Save");
   const showTokenState = () => {
     const has = Boolean(tokens.get());
-    setText(tokenState, has ? "token set" : "no token: view only");
-    tokenState.dataset.ok = String(has);
+    const refused = tokens.isRefused;
+    setText(tokenState, refused ? "token refused: enter it again" : has ? "token set" : "no token: view only");
+    tokenState.dataset.ok = String(has && !refused);
   };
   tokenSave.addEventListener("click", () => {
     tokens.set(tokenInput.value);
@@ -40,6 +41,7 @@ export function mountTopbar(root: HTMLElement, ctx: Ctx, outcomes: () => Outcome
     if (ev.key === "Enter") tokenSave.click();
   });
   document.addEventListener("visland:need-token", () => {
+    showTokenState();
     tokenInput.classList.add("attention");
     tokenInput.focus();
   });

@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { extractToken, type KeyValueStore, TokenKeeper } from "../../src/lib/token";
+import { type KeyValueStore, TokenKeeper, withoutTokenInAddress } from "../../src/lib/token";
 
 class MemoryStore implements KeyValueStore {
   data = new Map<string, string>();
@@ -14,22 +14,20 @@ class MemoryStore implements KeyValueStore {
   }
 }
 
-describe("extractToken", () => {
-  it("takes the token from the query and removes it", () => {
-    expect(extractToken("http://127.0.0.1:8000/?token=abc123xyz&x=1")).toEqual({
-      token: "abc123xyz",
-      cleaned: "http://127.0.0.1:8000/?x=1",
-    });
+describe("withoutTokenInAddress", () => {
+  it("removes a token from the query, never handing it out", () => {
+    expect(withoutTokenInAddress("http://127.0.0.1:8000/?token=abc123xyz&x=1")).toBe("http://127.0.0.1:8000/?x=1");
+    expect(withoutTokenInAddress("http://h/?TOKEN=a")).toBe("http://h/");
   });
 
-  it("takes the token from the hash", () => {
-    expect(extractToken("http://h/#token=zzz&tab=3")).toEqual({ token: "zzz", cleaned: "http://h/#tab=3" });
-    expect(extractToken("http://h/#token=zzz")).toEqual({ token: "zzz", cleaned: "http://h/" });
+  it("removes a token from the hash", () => {
+    expect(withoutTokenInAddress("http://h/#token=zzz&tab=3")).toBe("http://h/#tab=3");
+    expect(withoutTokenInAddress("http://h/#token=zzz")).toBe("http://h/");
   });
 
-  it("gives null when there is none or it is blank", () => {
-    expect(extractToken("http://h/?a=1")).toEqual({ token: null, cleaned: "http://h/?a=1" });
-    expect(extractToken("http://h/?token=%20").token).toBeNull();
+  it("gives null when there is none", () => {
+    expect(withoutTokenInAddress("http://h/?a=1#b=2")).toBeNull();
+    expect(withoutTokenInAddress("http://h/")).toBeNull();
   });
 });
 
@@ -44,6 +42,21 @@ describe("TokenKeeper", () => {
     k.set("");
     expect(k.get()).toBeNull();
     expect(store.data.size).toBe(0);
+  });
+
+  it("stops offering a refused token until a new one is set, and tells listeners", () => {
+    const k = new TokenKeeper(new MemoryStore());
+    const seen: (string | null)[] = [];
+    k.onChange((t) => seen.push(t));
+    k.set("old-token");
+    k.markRefused();
+    expect(k.get()).toBe("old-token");
+    expect(k.usable()).toBeNull();
+    expect(k.isRefused).toBe(true);
+    k.set("new-token");
+    expect(k.usable()).toBe("new-token");
+    expect(k.isRefused).toBe(false);
+    expect(seen).toEqual(["old-token", "new-token"]);
   });
 
   it("works for this page when storage throws", () => {

@@ -203,9 +203,33 @@ describe("WsClient", () => {
     expect(() => new WsClient({ url: "ws://x", minDelayMs: 10, maxDelayMs: 5 })).toThrowError(RangeError);
   });
 
+  it("sends the token as the first message of each socket, never in the URL", async () => {
+    let token: string | null = "first-token";
+    const client = make({ auth: () => token, threshold: true });
+    client.start();
+    await waitFor(() => received.length >= 2);
+    expect(JSON.parse(received[0])).toEqual({ type: "auth", token: "first-token" });
+    expect(JSON.parse(received[1])).toEqual({ type: "subscribe", threshold: true });
+    token = "second-token";
+    received.length = 0;
+    client.restart();
+    await waitFor(() => received.length >= 1);
+    expect(JSON.parse(received[0])).toEqual({ type: "auth", token: "second-token" });
+    for (const s of server.clients) expect(s.protocol).toBe("");
+  });
+
+  it("remembers the server's close code (4401: the token is wrong)", async () => {
+    server.removeAllListeners("connection");
+    server.on("connection", (sock) => sock.close(4401, "The operator token is wrong."));
+    const client = make();
+    client.start();
+    await waitFor(() => client.stats.lastCloseCode === 4401);
+    expect(client.stats.lastError).toContain("4401");
+  });
+
   it("builds the /ws URL from the page location", () => {
     expect(wsUrlFor({ protocol: "http:", host: "127.0.0.1:8000" })).toBe("ws://127.0.0.1:8000/ws");
-    expect(wsUrlFor({ protocol: "https:", host: "gcs.local" }, "a b&c")).toBe("wss://gcs.local/ws?token=a%20b%26c");
+    expect(wsUrlFor({ protocol: "https:", host: "gcs.local" })).toBe("wss://gcs.local/ws");
   });
 
   it("uses the URL function at each connect", async () => {

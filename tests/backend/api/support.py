@@ -28,6 +28,8 @@ def make_settings(data_dir, **overrides) -> Settings:
         "sim_speedup": 1.0,
         "link_timeout_s": 1.5,
         "command_timeout_s": 3.0,
+        # Starlette's TestClient names the server "testserver".
+        "allowed_hosts": ["testserver"],
     }
     values.update(overrides)
     return Settings(**values)

@@ -51,6 +51,12 @@ def test_nothing_to_abort_is_a_conflict(client):
         ("/api/missions/land", {"approach_alt_m": -2}, "approach_alt_m"),
         ("/api/missions/land", {"surprise": 1}, "surprise"),
         ("/api/missions/hover", {"altitude_m": 500}, "altitude_m"),
+        # The cases: a tiny height is no height, a boolean is not a number.
+        ("/api/missions/hover", {"altitude_m": 1e-300}, "altitude_m"),
+        ("/api/missions/hover", {"altitude_m": True}, "altitude_m"),
+        ("/api/missions/hover", {"hold_s": "20"}, "hold_s"),
+        ("/api/missions/land", {"approach_alt_m": 0.5}, "approach_alt_m"),
+        ("/api/missions/land", {"search_s": None}, "search_s"),
         ("/api/missions/hover", {"abort_mode": "LAND"}, "abort_mode"),
     ],
 )
@@ -135,6 +141,9 @@ def test_hover_then_abort_then_land_by_vision(client):
     )
     assert done["state"] == "landed", done
     wait_for(lambda: current(client)["stored"], timeout=5)
+    # A whole flight of the stand-in's telemetry, and nothing of it impossible.
+    telemetry = client.get("/api/telemetry").json()
+    assert telemetry["implausible"] == 0, telemetry["last_implausible"]
     touchdown = done["touchdown"]
     assert touchdown["source"] == "telemetry"
     assert touchdown["error_m"] < 0.15

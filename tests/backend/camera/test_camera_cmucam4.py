@@ -5,7 +5,6 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
@@ -251,11 +250,9 @@ def test_fault_camera_timeout_mid_frame(make_board, make_cam) -> None:
     board = make_board(image=img, faults=Faults(timeout_at_column=40))
     cam = make_cam(board.path)
     cam.connect()
-    t0 = time.monotonic()
     with pytest.raises(CMUcam4CameraError, match="column 40: Camera Timeout Error") as info:
         cam.snapshot()
     assert info.value.text == "Camera Timeout Error"
-    assert time.monotonic() - t0 < 2.0
     # The stream recovers: the next frame is complete and exact.
     assert np.array_equal(cam.snapshot().image, quantised(img))
 
@@ -271,11 +268,9 @@ def test_fault_garbage_before_banner(make_board, make_cam) -> None:
 def test_fault_garbage_only_is_not_a_cmucam4(make_board, make_cam) -> None:
     board = make_board(faults=Faults(garbage_only=True))
     cam = make_cam(board.path, tries=1)
-    t0 = time.monotonic()
     with pytest.raises(CMUcam4NotFound) as info:
         cam.connect()
     msg = str(info.value)
-    assert time.monotonic() - t0 < 3 * 0.15 + 1.0
     assert board.path in msg and "received b" in msg and "\n" not in msg
 
 
@@ -295,10 +290,8 @@ def test_fault_reset_mid_frame(make_board, make_cam) -> None:
     board = make_board(image=img, faults=Faults(reset_at_column=30))
     cam = make_cam(board.path)
     cam.connect()
-    t0 = time.monotonic()
     with pytest.raises(CMUcam4Error):
         cam.snapshot()
-    assert time.monotonic() - t0 < 5.0
     # The board is back at 19,200 baud; connecting again recovers.
     assert cam.connect() == "1.02"
     assert np.array_equal(cam.snapshot().image, quantised(img))
@@ -308,11 +301,9 @@ def test_fault_reset_mid_tracking_stream(make_board, make_cam) -> None:
     board = make_board(image=picture(), faults=Faults(reset_after_packets=5))
     cam = make_cam(board.path)
     cam.connect()
-    t0 = time.monotonic()
     with pytest.raises(CMUcam4Error), cam.track() as stream:
         for _ in range(100):
             next(stream)
-    assert time.monotonic() - t0 < 5.0
     assert cam.connect() == "1.02"
 
 
@@ -320,10 +311,8 @@ def test_fault_port_disappears(make_board, make_cam) -> None:
     board = make_board(image=picture(), faults=Faults(disappear_at_column=20))
     cam = make_cam(board.path)
     cam.connect()
-    t0 = time.monotonic()
     with pytest.raises(CMUcam4Disconnected, match="disappeared"):
         cam.snapshot()
-    assert time.monotonic() - t0 < 3.0
     cam.close()
     # Usually "cannot open": unless another process got the same pty number meanwhile.
     with pytest.raises(CMUcam4Error, match=board.path):
@@ -335,20 +324,16 @@ def test_camera_that_goes_quiet_times_out(make_board, make_cam) -> None:
     cam = make_cam(board.path)
     cam.connect()
     board.set_silent(True)
-    t0 = time.monotonic()
     with pytest.raises(CMUcam4Timeout):
         cam.snapshot()
-    assert time.monotonic() - t0 < 4 * 0.5 + 1.0
     board.set_silent(False)
     cam.resync()
     assert cam.snapshot().image.shape == (120, 160, 3)
 
 
 def test_nonexistent_port() -> None:
-    t0 = time.monotonic()
     with pytest.raises(CMUcam4Error, match="cannot open /dev/nonexistent-cmucam4"):
         CMUcam4("/dev/nonexistent-cmucam4").connect()
-    assert time.monotonic() - t0 < 1.0
 
 
 def test_bad_arguments() -> None:
@@ -392,9 +377,7 @@ def test_cli_snapshot(make_board, tmp_path) -> None:
 
 
 def test_cli_nonexistent_port(tmp_path) -> None:
-    t0 = time.monotonic()
     res = run_cli("/dev/ttyNOPE9", "--snapshot", str(tmp_path / "x.png"))
-    assert time.monotonic() - t0 < 10
     assert res.returncode != 0
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "/dev/ttyNOPE9" in lines[0]
@@ -403,9 +386,7 @@ def test_cli_nonexistent_port(tmp_path) -> None:
 
 def test_cli_garbage_port(make_board, tmp_path) -> None:
     board = make_board(faults=Faults(garbage_only=True))
-    t0 = time.monotonic()
     res = run_cli(board.path, "--snapshot", str(tmp_path / "x.png"), "--reset-timeout", "0.5")
-    assert time.monotonic() - t0 < 10
     assert res.returncode != 0
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1, res.stderr

