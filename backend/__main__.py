@@ -136,7 +136,9 @@ def main(argv: list[str] | None = None) -> int:
     kept = f"kept in {token_path}" if token_path else "given on the command line/env"
     lines = [
         f"Visland ground station {'(stand-in vehicle)' if settings.mavlink is None else ''}",
-        f"  dashboard  http://{browsable_host(settings.host)}:{settings.port}",
+        # The token rides in the fragment: the browser never sends it to the server and
+        # the page moves it to its own storage at once.
+        f"  dashboard  http://{browsable_host(settings.host)}:{settings.port}/#token={token}",
     ]
     if settings.viser_port:
         lines.append(f"  3D view    http://{browsable_host(settings.host)}:{settings.viser_port}")

@@ -23,8 +23,21 @@ from fastapi.staticfiles import StaticFiles
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
+from backend.api.docs import install_docs
 from backend.api.openapi import install_openapi
-from backend.api.routes import flights, health, missions, reference, status, telemetry, vehicle
+from backend.api.routes import (
+    abort,
+    flights,
+    health,
+    missions,
+    params,
+    perspective,
+    reference,
+    replay,
+    status,
+    telemetry,
+    vehicle,
+)
 from backend.api.routes import settings as settings_routes
 from backend.api.ws import Hub
 from backend.settings import Settings, get_settings
@@ -157,6 +170,8 @@ def create_app(settings: Settings | None = None, *, station: Station | None = No
         version=VERSION,
         description="Lands an ArduCopter on an 'H' helipad by machine vision.",
         lifespan=lifespan,
+        docs_url=None,  # served offline by backend.api.docs
+        redoc_url=None,
     )
     app.state.station = None
     app.state.settings = settings
@@ -188,7 +203,11 @@ def create_app(settings: Settings | None = None, *, station: Station | None = No
         reference,
         vehicle,
         flights,
+        replay,
         missions,
+        abort,
+        params,
+        perspective,
         settings_routes,
     ):
         app.include_router(module.router, prefix="/api")
@@ -198,6 +217,7 @@ def create_app(settings: Settings | None = None, *, station: Station | None = No
         await app.state.hub.serve(ws)
 
     install_openapi(app)
+    install_docs(app, FRONTEND_DIST)
 
     if (FRONTEND_DIST / "index.html").is_file():
         app.mount("/", StaticFiles(directory=FRONTEND_DIST, html=True), name="dashboard")

@@ -36,8 +36,11 @@ from backend.frames import camera_yaw_in_pad
 from backend.link import LinkEvent, VehicleLink
 from backend.missions.manager import MissionManager
 from backend.recorder import Recorder
+from backend.services.abort import AbortService
 from backend.services.events import EventLog
 from backend.services.flights import FlightService
+from backend.services.params import ParamService
+from backend.services.perspective import PerspectiveDrafts
 from backend.services.references import ReferenceService
 from backend.services.runtime import RuntimeSettings
 from backend.services.status import StatusService
@@ -88,6 +91,9 @@ class Station:
     viewer: Viewer3D | None
     viewer_feed: ViewerFeed | None
     status: StatusService
+    params: ParamService
+    abort: AbortService
+    perspective: PerspectiveDrafts
     started: bool = False
     _stopped: bool = field(default=False, repr=False)
 
@@ -206,7 +212,9 @@ def build_station(settings: Settings) -> Station:
             record_frames=lambda: runtime.record_frames,
             on_event=events.emit,
         )
-        flights = FlightService(storage, recorder)
+        flights = FlightService(storage, recorder, tlog_dir=tlog_dir)
+        # A flight a crash left open is closed with what it had written.
+        flights.recover_interrupted()
         missions = MissionManager(link, results, storage, events.emit)
 
         viewer = viewer_feed = None
@@ -236,6 +244,13 @@ def build_station(settings: Settings) -> Station:
             flights=flights,
             viser_url=None if viewer is None else viewer.url,
         )
+        params = ParamService(
+            link,
+            events,
+            latency_ms=lambda: worker.stats.to_dict().get("latency_ms"),
+        )
+        abort = AbortService(link, missions, events)
+        perspective = PerspectiveDrafts(data_dir / "references" / "drafts", references)
         # Whoever sees an event (a flight, a mission's state, the link) then reads a
         # status that shows it; a mission's live state moves the status on its own.
         events.before_each(status.refresh_now)
@@ -267,6 +282,9 @@ def build_station(settings: Settings) -> Station:
         viewer=viewer,
         viewer_feed=viewer_feed,
         status=status,
+        params=params,
+        abort=abort,
+        perspective=perspective,
     )
 
 

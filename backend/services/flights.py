@@ -7,24 +7,42 @@ database: the routes call it from worker threads, never on the event loop.
 
 from __future__ import annotations
 
+import json
+import logging
+import shutil
+import time
 from pathlib import Path
 from typing import Any
 
 from backend.link import LinkEvent
-from backend.recorder import Recorder
+from backend.recorder import Recorder, copy_tlog_window
+from backend.services import replay
 from backend.storage import Storage
+
+log = logging.getLogger(__name__)
+
+#: How a flight left open by a crash is closed at the next start.
+INTERRUPTED = "interrupted"
+RECOVERED = "server stopped unexpectedly; closed at the next start"
 
 
 class NoSuchFlight(LookupError):
     """No flight with that id (or without the file asked for)."""
 
 
+class FlightBusy(RuntimeError):
+    """The flight is still being recorded."""
+
+
 class FlightService:
     """The flights in ``storage``, recorded by ``recorder``."""
 
-    def __init__(self, storage: Storage, recorder: Recorder) -> None:
+    def __init__(
+        self, storage: Storage, recorder: Recorder, *, tlog_dir: Path | None = None
+    ) -> None:
         self._storage = storage
         self._recorder = recorder
+        self._tlog_dir = tlog_dir
 
     @property
     def current(self) -> dict[str, Any] | None:
@@ -87,3 +105,84 @@ class FlightService:
         if not path.is_file():
             raise NoSuchFlight(f"Flight {flight_id} has no frame {seq}.")
         return path
+
+    def size_bytes(self, row: dict[str, Any]) -> int:
+        """Bytes the flight's folder takes on disk (0 when it is gone)."""
+        folder = Path(row["dir"]) if row.get("dir") else None
+        if folder is None or not folder.is_dir():
+            return 0
+        return sum(p.stat().st_size for p in folder.rglob("*") if p.is_file())
+
+    def delete(self, flight_id: int) -> dict[str, Any]:
+        """Delete a flight's folder and row; :class:`FlightBusy` while it is recorded."""
+        row = self.get(flight_id)
+        current = self._recorder.current
+        if current is not None and current["id"] == flight_id:
+            raise FlightBusy(f"Flight {flight_id} is being recorded; stop it before deleting.")
+        size = self.size_bytes(row)
+        if row.get("dir"):
+            shutil.rmtree(row["dir"], ignore_errors=True)
+        self._storage.delete_flight(flight_id)
+        return {"id": flight_id, "freed_bytes": size}
+
+    def recover_interrupted(self) -> list[int]:
+        """Close the flights a crash left open, with what they had written: their frames
+        and results stay, their .tlog is cut from the session logs up to the last result
+        (or the folder's last write). Returns the ids closed."""
+        recovered = []
+        for row in self._storage.list_flights():
+            folder = Path(row["dir"]) if row.get("dir") else None
+            if row.get("end_reason") != INTERRUPTED or folder is None or not folder.is_dir():
+                continue
+            try:
+                recovered.append(self._recover(row, folder))
+            except Exception:
+                log.exception("could not recover flight %s", row["id"])
+        return recovered
+
+    def _recover(self, row: dict[str, Any], folder: Path) -> int:
+        results = folder / "results.jsonl"
+        frames, last_t = 0, None
+        if results.is_file():
+            with results.open(encoding="utf-8", errors="replace") as fh:
+                for line in fh:
+                    try:
+                        last_t = float(json.loads(line)["t_unix"])
+                    except (ValueError, KeyError, TypeError):
+                        continue  # the line the crash cut
+                    frames += 1
+        mtimes = [p.stat().st_mtime for p in folder.rglob("*") if p.is_file()]
+        ended = max([row["started"], *(mtimes or []), *([last_t] if last_t else [])])
+        if self._tlog_dir is not None and self._tlog_dir.is_dir():
+            out = folder / "flight.tlog"
+            with out.open("wb") as fh:
+                for path in sorted(self._tlog_dir.glob("*.tlog")):
+                    if path.stat().st_mtime >= row["started"] - 1.0:
+                        copy_tlog_window(path, fh, row["started"], ended)
+        self._storage.close_interrupted_flight(
+            row["id"], ended=ended, frames=frames, end_reason=RECOVERED
+        )
+        return int(row["id"])
+
+    def replay(self, flight_id: int) -> dict[str, Any]:
+        """The flight as one timeline (:mod:`backend.services.replay`)."""
+        row = self.get(flight_id)
+        folder = self.folder(flight_id)
+        self._recorder.write_tlog_now(flight_id)
+        frames = replay.read_results(folder / "results.jsonl", flight_id)
+        telemetry, texts = replay.read_tlog(folder / "flight.tlog")
+        t0 = row["started"]
+        t1 = row["ended"] or time.time()
+        times = [f["t"] for f in frames] + [s["t"] for s in telemetry]
+        if times:
+            t0, t1 = min(t0, min(times)), max(t1, max(times))
+        runs = self._storage.mission_runs_between(t0, t1)
+        return {
+            "id": flight_id,
+            "t0": t0,
+            "t1": t1,
+            "frames": frames,
+            "telemetry": telemetry,
+            "texts": texts,
+            "missions": replay.mission_states(runs),
+        }

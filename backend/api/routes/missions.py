@@ -15,7 +15,13 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from backend.api.deps import MissionsDep, Operator, RunId, VehicleDep, Viewer
 from backend.api.errors import OPERATOR_ERRORS, VIEWER_ERRORS, errors
-from backend.api.schemas import MissionCommand, MissionRun, MissionRunSummary, MissionSnapshot
+from backend.api.schemas import (
+    MissionCommand,
+    MissionDefaults,
+    MissionRun,
+    MissionRunSummary,
+    MissionSnapshot,
+)
 from backend.missions import HoverConfig
 from backend.missions.manager import MissionBusy
 from backend.services.vehicle import VehicleService
@@ -36,18 +42,68 @@ class _Finite(BaseModel):
         return value
 
 
+_ABORT_DOC = (
+    "where the mission leaves the vehicle when it gives up (LOITER holds in GUIDED instead "
+    "when no pilot holds the throttle)"
+)
+
+
 class HoverRequest(_Finite):
-    altitude_m: float = Field(4.0, gt=0, le=100, description="hover height above home (m)")
-    hold_s: float = Field(20.0, gt=0, le=3600, description="how long to hold over the pad")
-    abort_mode: Literal["LOITER", "RTL"] = "LOITER"
+    altitude_m: float = Field(
+        4.0, gt=0, le=100, title="Altitude", description="hover height above home (m)"
+    )
+    hold_s: float = Field(
+        20.0, gt=0, le=3600, title="Hold time", description="how long to hold over the pad (s)"
+    )
+    abort_mode: Literal["LOITER", "RTL"] = Field(
+        "LOITER", title="If it gives up", description=_ABORT_DOC
+    )
 
 
 class LandRequest(_Finite):
-    strategy: Literal["plnd", "guided"] = "plnd"
-    approach_alt_m: float = Field(4.0, gt=0, le=50, description="height to look for the pad")
-    abort_mode: Literal["LOITER", "RTL"] = "LOITER"
-    lost_timeout_s: float = Field(5.0, gt=0, le=120)
-    search_s: float = Field(8.0, gt=0, le=600)
+    strategy: Literal["plnd", "guided"] = Field(
+        "plnd",
+        title="Strategy",
+        description="plnd: ArduCopter's precision landing fed LANDING_TARGET; guided: GUIDED "
+        "velocity targets from the vision pose",
+    )
+    approach_alt_m: float = Field(
+        4.0, gt=0, le=50, title="Approach height", description="height to look for the pad (m)"
+    )
+    abort_mode: Literal["LOITER", "RTL"] = Field(
+        "LOITER", title="If it gives up", description=_ABORT_DOC
+    )
+    lost_timeout_s: float = Field(
+        5.0,
+        gt=0,
+        le=120,
+        title="Lost timeout",
+        description="pad unseen this long: climb and search (s)",
+    )
+    search_s: float = Field(
+        8.0, gt=0, le=600, title="Search time", description="search this long, then abort (s)"
+    )
+
+
+def form_fields(model: type[BaseModel]) -> list[dict[str, Any]]:
+    """The request model's fields as the dashboard's form shows them."""
+    schema = model.model_json_schema()
+    out = []
+    for name, prop in schema["properties"].items():
+        field: dict[str, Any] = {
+            "name": name,
+            "title": prop.get("title", name),
+            "description": prop.get("description", ""),
+            "default": prop.get("default"),
+            "kind": "choice" if "enum" in prop else "number",
+            "choices": [str(c) for c in prop.get("enum", [])],
+            "minimum": prop.get("minimum"),
+            "maximum": prop.get("maximum"),
+            "exclusive_minimum": prop.get("exclusiveMinimum"),
+            "unit": "s" if name.endswith("_s") else "m" if name.endswith("_m") else "",
+        }
+        out.append(field)
+    return out
 
 
 def _check_link(vehicle: VehicleService) -> None:
@@ -146,6 +202,14 @@ def current(missions: MissionsDep) -> dict[str, Any] | None:
 def history(missions: MissionsDep) -> list[dict[str, Any]]:
     """Stored runs, newest first, with their outcomes and touchdown errors."""
     return missions.history()
+
+
+@router.get(
+    "/defaults", dependencies=[Viewer], response_model=MissionDefaults, responses=VIEWER_ERRORS
+)
+def defaults() -> dict[str, Any]:
+    """Every mission parameter with its default and bounds (the dashboard's forms)."""
+    return {"hover": form_fields(HoverRequest), "land": form_fields(LandRequest)}
 
 
 @router.get(
