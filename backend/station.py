@@ -249,6 +249,7 @@ def build_station(settings: Settings) -> Station:
             events,
             latency_ms=lambda: worker.stats.to_dict().get("latency_ms"),
         )
+        link.subscribe(params.on_link_event)
         abort = AbortService(link, missions, events)
         perspective = PerspectiveDrafts(data_dir / "references" / "drafts", references)
         # Whoever sees an event (a flight, a mission's state, the link) then reads a

@@ -15,7 +15,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from backend.link import CommandResult, LinkState, VehicleLink
+from backend.link import CommandResult, LinkEvent, LinkState, VehicleLink
 from backend.services.events import EventLog
 from backend.services.param_meta import META, check_value
 
@@ -28,6 +28,8 @@ LAG_RANGE_S = (0.02, 0.25)
 #: measures it under 10 ms at p95).
 SEND_MS = 10.0
 BATTERY_PARAMS = ("BATT_LOW_VOLT", "BATT_CRT_VOLT", "BATT_LOW_MAH", "BATT_CRT_MAH", "BATT_CAPACITY")
+#: Read whenever the link comes up: the alerts' thresholds and the landing panel's PLND state.
+WATCHED = (*BATTERY_PARAMS, "PLND_ENABLED", "PLND_TYPE", "PLND_LAG")
 
 
 class UnknownParam(LookupError):
@@ -97,11 +99,26 @@ class ParamService:
         self.fetched_at: float | None = None
 
     # --- reading ---------------------------------------------------------------------------
-    def listing(self) -> dict[str, Any]:
-        """Every parameter heard so far with its documentation, and whether that is all."""
+    def on_link_event(self, event: LinkEvent) -> None:
+        """When the link comes up (a start, a reboot), read :data:`WATCHED` in the
+        background: the battery alerts and the landing panel need them at once."""
+        if event.kind == "link_up":
+            threading.Thread(target=self._read_watched, name="params-watched", daemon=True).start()
+
+    def _read_watched(self) -> None:
+        for name in WATCHED:
+            if self._link.state != LinkState.UP:
+                return
+            self._link.get_param(name, timeout=2.0)
+
+    def listing(self, names: set[str] | None = None) -> dict[str, Any]:
+        """Every parameter heard so far (or those of ``names``) with its documentation,
+        and whether that is all of them."""
         table, count = self._link.param_table()
         params = []
         for name in sorted(table):
+            if names is not None and name not in names:
+                continue
             value, ptype = table[name]
             params.append(_describe(name, value, ptype))
         return {

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any
 
-from fastapi import APIRouter, HTTPException, Path, status
+from fastapi import APIRouter, HTTPException, Path, Query, status
 from fastapi.responses import JSONResponse
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
@@ -61,9 +61,20 @@ def _need_link(vehicle: VehicleService, what: str) -> None:
 
 
 @router.get("/params", dependencies=[Viewer], response_model=ParamListing, responses=VIEWER_ERRORS)
-def list_params(params: ParamsDep) -> dict[str, Any]:
-    """The parameters downloaded so far (``complete`` once the vehicle sent them all)."""
-    return params.listing()
+def list_params(
+    params: ParamsDep,
+    names: Annotated[
+        str | None,
+        Query(
+            max_length=2000,
+            pattern=r"^[A-Z0-9_,]*$",
+            description="only these, comma-separated (e.g. PLND_ENABLED,PLND_TYPE)",
+        ),
+    ] = None,
+) -> dict[str, Any]:
+    """The parameters heard so far (``complete`` once the vehicle sent them all)."""
+    wanted = None if not names else {n for n in names.split(",") if n}
+    return params.listing(wanted)
 
 
 @router.post(
@@ -96,7 +107,11 @@ def battery_thresholds(params: ParamsDep) -> dict[str, Any]:
     "/params/{name}",
     dependencies=[Operator],
     response_model=ParamWriteResult,
-    responses={**OPERATOR_ERRORS, **errors(404, 409, 422, 503)},
+    responses={
+        **OPERATOR_ERRORS,
+        **errors(404, 422, 503),
+        409: {"model": ParamWriteResult, "description": "The vehicle kept another value."},
+    },
 )
 def write_param(name: ParamName, body: ParamValue, params: ParamsDep, vehicle: VehicleDep) -> Any:
     """Write one parameter, checked against its type and documented range first."""
@@ -120,7 +135,14 @@ def write_param(name: ParamName, body: ParamValue, params: ParamsDep, vehicle: V
     "/params/precland-setup",
     dependencies=[Operator],
     response_model=PrecLandSetup,
-    responses={**OPERATOR_ERRORS, **errors(409, 503)},
+    responses={
+        **OPERATOR_ERRORS,
+        **errors(503),
+        409: {
+            "model": PrecLandSetup,
+            "description": "Armed (ErrorResponse), or the vehicle refused a write or the reboot.",
+        },
+    },
 )
 def precland_setup(params: ParamsDep, vehicle: VehicleDep) -> Any:
     """PLND_ENABLED 1, PLND_TYPE 1 (MAVLink), PLND_EST_TYPE 1, PLND_LAG from the measured

@@ -3433,13 +3433,13 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorResponse"];
                 };
             };
-            /** @description Refused: the vehicle said no (its reasons verbatim), or the state forbids it. */
+            /** @description Armed (ErrorResponse), or the vehicle refused a write or the reboot. */
             409: {
                 headers: {
                     [name: string]: unknown;
                 };
                 content: {
-                    "application/json": components["schemas"]["ErrorResponse"];
+                    "application/json": components["schemas"]["PrecLandSetup"];
                 };
             };
             /** @description Validation Error */
@@ -3552,13 +3552,13 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorResponse"];
                 };
             };
-            /** @description Refused: the vehicle said no (its reasons verbatim), or the state forbids it. */
+            /** @description The vehicle kept another value. */
             409: {
                 headers: {
                     [name: string]: unknown;
                 };
                 content: {
-                    "application/json": components["schemas"]["ErrorResponse"];
+                    "application/json": components["schemas"]["ParamWriteResult"];
                 };
             };
             /** @description The input is invalid (one sentence says why). */
