@@ -59,12 +59,14 @@ function start(): void {
 
   const app = document.getElementById("app");
   if (!app) throw new Error("no #app element");
+  // The strip and the alerts stay in view; the tabs scroll away with the page.
   const top = h("header", { class: "top" });
+  const navRow = h("div", { class: "nav-row" });
   const main = h("main", { class: "pages" });
-  app.append(top, main);
+  app.append(top, navRow, main);
   const strip = mountStatusStrip(top, ctx);
   const alarm = mountAlertBanner(top, ctx);
-  const nav = mountNav(top, main, ctx);
+  const nav = mountNav(navRow, main, ctx);
 
   // Live: camera and landing side by side; then the map, the 3D view, the vehicle.
   const live = nav.pages.live;

@@ -26,6 +26,7 @@ export function mountAlertBanner(root: HTMLElement, ctx: Ctx): AlarmState {
   const shown = new Map<string, Shown>();
   const alarm: AlarmState = { sounding: false, beeps: 0, alerts: [] };
   let ekfWasHealthy = false;
+  let wasOpen = false; // the first connection is not a lost one
   let audio: AudioContext | null = null;
 
   function beep(critical: boolean): void {
@@ -50,9 +51,10 @@ export function mountAlertBanner(root: HTMLElement, ctx: Ctx): AlarmState {
     if (v.linkState !== "up") ekfWasHealthy = false;
     else if (v.ekfHealthy) ekfWasHealthy = true;
     const rebooting = store.rebootingUntil > Date.now();
+    wasOpen = wasOpen || store.connection === "open";
     const now = activeAlerts({
       linkState: rebooting ? "up" : store.telemetry ? v.linkState : (store.status?.link.state ?? "unknown"),
-      serverConnected: store.connection === "open" || store.connection === "idle",
+      serverConnected: !wasOpen || store.connection === "open",
       armed: v.armed,
       batteryV: v.batteryV,
       batteryPct: v.batteryPct,
