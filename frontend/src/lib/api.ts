@@ -311,7 +311,8 @@ export function describeFailure(error: ApiError): string {
     case 401:
       return sentence("Not authorised", detail);
     case 409:
-      return sentence("Refused", detail);
+      // "refused by the vehicle (FAILED)" needs no "Refused" before it
+      return sentence(/refus/i.test(detail) ? "" : "Refused", detail);
     case 422:
       return sentence("Not accepted", detail);
     case 503:
