@@ -204,7 +204,7 @@ def _ellipse_of(hull: np.ndarray, shape: tuple[int, int]) -> tuple[np.ndarray, f
     phi = math.atan2(u[1], u[0])
     R = np.array([[math.cos(phi), -math.sin(phi)], [math.sin(phi), math.cos(phi)]])
     square = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], float)
-    corners = [*(A @ R @ square.T).T, cx, cy]
+    corners = (A @ R @ square.T).T + np.array([cx, cy])
     return corners, float(fit)
 
 
@@ -288,6 +288,9 @@ def suggest_outline(image_bgr: np.ndarray) -> Outline:
             hull = cv2.convexHull(c)
             area = cv2.contourArea(hull)
             if area < 1.5 * h_area or area > 0.9 * sh * sw or not _contains(hull, centre):
+                continue
+            # A pad is a solid shape: a region that ran into the floor around it is not.
+            if cv2.contourArea(c) < 0.9 * area:
                 continue
             quad = _quad_of(hull, c)
             if quad is not None and (quad_best is None or area > quad_best[0]):

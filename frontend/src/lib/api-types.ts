@@ -356,7 +356,7 @@ export interface paths {
         };
         /**
          * List Params
-         * @description The parameters downloaded so far (``complete`` once the vehicle sent them all).
+         * @description The parameters heard so far (``complete`` once the vehicle sent them all).
          */
         get: operations["list_params_api_params_get"];
         put?: never;
@@ -3314,7 +3314,10 @@ export interface operations {
     };
     list_params_api_params_get: {
         parameters: {
-            query?: never;
+            query?: {
+                /** @description only these, comma-separated (e.g. PLND_ENABLED,PLND_TYPE) */
+                names?: string | null;
+            };
             header?: never;
             path?: never;
             cookie?: never;
