@@ -83,7 +83,7 @@ def test_a_real_round_pad_photographed_at_an_angle_gives_a_reference():
     assert outline.kind == "ellipse" and outline.ellipse is not None
     # the H found lies inside the hand-checked box around it
     x, y, w, h = item["h_box"]
-    hx, hy, hw, hh = outline.h_box
+    hx, hy, hw, _ = outline.h_box
     assert x - 0.1 * w <= hx and hx + hw <= x + 1.1 * w and y - 0.1 * h <= hy <= y + 1.1 * h
     # the H's centre is near the middle of the suggested square
     centre = outline.ellipse.mean(axis=0)
