@@ -15,14 +15,24 @@ const DOCS_ASSETS: [string, string][] = [
   ["redoc/bundles/redoc.standalone.js", "redoc.standalone.js"],
 ];
 
+const REDOC_LOGO_CDN = "https://cdn.redoc.ly/redoc/logo-mini.svg";
+const REDOC_LOGO =
+  '<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 16 16"><rect width="16" height="16" rx="3" fill="#0ea5e9"/></svg>';
+
 function docsAssets(): Plugin {
   return {
     name: "visland-docs-assets",
     apply: "build",
     generateBundle() {
       for (const [from, name] of DOCS_ASSETS) {
-        this.emitFile({ type: "asset", fileName: `docs-assets/${name}`, source: readFileSync(require.resolve(from)) });
+        let source: string | Buffer = readFileSync(require.resolve(from));
+        if (name === "redoc.standalone.js") {
+          // ReDoc's footer logo is the one thing it fetches from a CDN: ours instead.
+          source = source.toString("utf8").replaceAll(REDOC_LOGO_CDN, "/docs-assets/redoc-logo.svg");
+        }
+        this.emitFile({ type: "asset", fileName: `docs-assets/${name}`, source });
       }
+      this.emitFile({ type: "asset", fileName: "docs-assets/redoc-logo.svg", source: REDOC_LOGO });
     },
   };
 }
