@@ -21,6 +21,9 @@ from backend.services.param_meta import META, check_value
 
 #: How long a full parameter download may take (a telemetry radio: ~800 params at 57600 baud).
 LIST_TIMEOUT_S = 20.0
+#: No new parameter for this long: ask for the list again (at most LIST_ASKS times).
+LIST_STALL_S = 2.0
+LIST_ASKS = 4
 #: PLND_LAG's documented range (s).
 LAG_RANGE_S = (0.02, 0.25)
 #: Result -> LANDING_TARGET on the link, added to the measured capture -> result (ms):
@@ -138,16 +141,30 @@ class ParamService:
         if self._link.state != LinkState.UP:
             raise ConnectionError("the link to the vehicle is down; no parameters were read")
         with self._lock:
-            sent = self._link.request_param_list()
-            if not sent.ok:
-                raise ConnectionError(sent.detail)
             deadline = time.monotonic() + timeout_s
+            asked = 0
+            heard, heard_at = -1, 0.0
             while time.monotonic() < deadline:
                 table, count = self._link.param_table()
                 if count > 0 and len(table) >= count:
                     break
+                now = time.monotonic()
                 if self._link.state != LinkState.UP:
-                    break
+                    # Rebooting, or a radio drop-out: ask again once it is back.
+                    asked = min(asked, LIST_ASKS - 1)
+                    heard_at = -math.inf
+                    time.sleep(0.1)
+                    continue
+                if len(table) != heard:
+                    heard, heard_at = len(table), now
+                # Nothing new for a while (a lost request, a vehicle still booting): ask
+                # again, as ground stations do, a few times.
+                if (asked == 0 or now - heard_at > LIST_STALL_S) and asked < LIST_ASKS:
+                    sent = self._link.request_param_list()
+                    if not sent.ok:
+                        raise ConnectionError(sent.detail)
+                    asked += 1
+                    heard_at = now
                 time.sleep(0.05)
             self.fetched_at = time.time()
         return self.listing()

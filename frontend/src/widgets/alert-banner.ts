@@ -27,6 +27,8 @@ export function mountAlertBanner(root: HTMLElement, ctx: Ctx): AlarmState {
   const alarm: AlarmState = { sounding: false, beeps: 0, alerts: [] };
   let ekfWasHealthy = false;
   let wasOpen = false; // the first connection is not a lost one
+  // A mission that had already ended when the page opened is history, not an alarm.
+  let missionBaseline: string | null | undefined;
   let audio: AudioContext | null = null;
 
   function beep(critical: boolean): void {
@@ -52,6 +54,9 @@ export function mountAlertBanner(root: HTMLElement, ctx: Ctx): AlarmState {
     else if (v.ekfHealthy) ekfWasHealthy = true;
     const rebooting = store.rebootingUntil > Date.now();
     wasOpen = wasOpen || store.connection === "open";
+    const m = store.status?.mission ?? null;
+    const missionKey = m ? `${m.run_id}:${m.outcome}` : null;
+    if (missionBaseline === undefined && store.status) missionBaseline = m?.outcome ? missionKey : null;
     const now = activeAlerts({
       linkState: rebooting ? "up" : store.telemetry ? v.linkState : (store.status?.link.state ?? "unknown"),
       serverConnected: !wasOpen || store.connection === "open",
@@ -63,7 +68,7 @@ export function mountAlertBanner(root: HTMLElement, ctx: Ctx): AlarmState {
       ekfHealthy: v.ekfHealthy,
       ekfWasHealthy,
       statustexts: v.statustexts,
-      mission: store.status?.mission ?? null,
+      mission: missionKey !== null && missionKey === missionBaseline ? null : m,
       now: Date.now() / 1000,
     });
     const activeIds = new Set(now.map((a) => a.id));

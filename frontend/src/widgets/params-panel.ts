@@ -47,6 +47,7 @@ export function mountParamsPanel(root: HTMLElement, ctx: Ctx): { load(): void } 
   root.append(panel("Vehicle parameters", "params", h("div", { class: "control-row wrap" }, search, refresh, precland, reboot), info, outcome, table));
 
   let listing: ParamListing | null = null;
+  let downloading = false; // a listing read meanwhile is older than the download's
   const say = (ok: boolean, text: string) => {
     setText(outcome, text);
     outcome.dataset.ok = String(ok);
@@ -110,7 +111,9 @@ export function mountParamsPanel(root: HTMLElement, ctx: Ctx): { load(): void } 
 
   async function load(): Promise<void> {
     try {
-      listing = await api.params();
+      const got = await api.params();
+      if (downloading) return;
+      listing = got;
       render();
     } catch (error) {
       setText(info, sentence("The parameters could not be listed", (error as Error).message));
@@ -120,6 +123,7 @@ export function mountParamsPanel(root: HTMLElement, ctx: Ctx): { load(): void } 
   search.addEventListener("input", render);
   refresh.addEventListener("click", async () => {
     refresh.disabled = true;
+    downloading = true;
     setText(info, "Downloading every parameter from the vehicle…");
     try {
       listing = await api.refreshParams();
@@ -127,8 +131,10 @@ export function mountParamsPanel(root: HTMLElement, ctx: Ctx): { load(): void } 
     } catch (error) {
       if (error instanceof ApiError && error.status === 401) document.dispatchEvent(new CustomEvent("visland:need-token"));
       say(false, error instanceof ApiError ? describeFailure(error) : String(error));
+      downloading = false;
       void load();
     } finally {
+      downloading = false;
       refresh.disabled = false;
     }
   });
