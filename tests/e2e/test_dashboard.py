@@ -34,12 +34,15 @@ pytestmark = [pytest.mark.e2e, pytest.mark.slow, NO_CHROMIUM]
 def test_page_loads_with_every_panel(page, station: Station) -> None:
     open_dashboard(page, station)
     assert "Visland" in page.title()
-    for testid in ("camera", "mission", "controls", "map", "viser", "flight", "events", "abort"):
+    for testid in ("camera", "mission", "controls", "map", "viser", "view3d", "flight", "events"):
         expect(page.get_by_test_id(testid)).to_be_visible()
     expect(page.get_by_test_id("token-state")).to_have_text("token set")
     assert "token" not in page.url
     status = station.get("/api/status")[1]
+    expect(page.get_by_test_id("viser-link")).to_have_attribute("href", status["viser_url"])
+    page.get_by_test_id("viser-embed").click()
     expect(page.get_by_test_id("viser-frame")).to_have_attribute("src", status["viser_url"])
+    expect(page.get_by_test_id("viser-legend")).to_be_visible()
     expect(page.get_by_test_id("camera-placeholder")).to_be_hidden(timeout=20_000)
     expect(page.get_by_test_id("pipeline-fps")).not_to_have_text("—", timeout=10_000)
     for tab, testid in (("params", "params"), ("flights", "flights"), ("reference", "reference")):

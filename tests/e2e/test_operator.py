@@ -379,7 +379,8 @@ def test_flights_list_download_replay_and_delete(page, station):
     page.get_by_test_id(f"replay-{flight_id}").click()
     frame = page.get_by_test_id("replay-frame")
     page.wait_for_function(
-        "document.querySelector('[data-testid=replay-frame]').dataset.seq !== ''"
+        "(() => { const f = document.querySelector('[data-testid=replay-frame]');"
+        " return f !== null && f.dataset.seq !== undefined && f.dataset.seq !== ''; })()"
     )
     mission = page.get_by_test_id("replay-mission")
     telemetry = page.get_by_test_id("replay-telemetry")
@@ -475,26 +476,35 @@ def test_reference_from_a_perspective_photo(page, station, tmp_path: Path):
 
 
 # --- the bars, measured: camera rate with the 3D view open, first paint after reload ---
+def measure_camera(page, seconds: float = 10.0) -> dict:
+    """Camera frames received and drawn per second over ``seconds``."""
+    read = "[performance.now(), window.visland.ws.stats.binaryFrames, window.visland.cameraDrawn]"
+    t0, n0, d0 = page.evaluate(read)
+    page.wait_for_timeout(seconds * 1000)
+    t1, n1, d1 = page.evaluate(read)
+    span = (t1 - t0) / 1000
+    return {"received_fps": round((n1 - n0) / span, 2), "drawn_fps": round((d1 - d0) / span, 2)}
+
+
 def test_frame_rate_with_the_3d_view_open_and_first_paint(browser, station):
     context, page = at_size(browser, "desktop")
     try:
         open_dashboard(page, station)
+        expect(page.get_by_test_id("camera-placeholder")).to_be_hidden(timeout=20_000)
+        # the dashboard's 3D view on screen beside the camera's panel
+        page.get_by_test_id("view3d").scroll_into_view_if_needed()
+        view3d_in_view = in_viewport(page, "view3d")
+        with_view3d = measure_camera(page)
+        # viser embedded and on screen (WebGL drawn by the CPU here: no graphics card)
+        page.get_by_test_id("viser-embed").click()
         frame = page.get_by_test_id("viser-frame")
-        frame.scroll_into_view_if_needed()
-        # the 3D view is open: its page loaded and drawing
         page.frame_locator("[data-testid=viser-frame]").locator("canvas").first.wait_for(
             timeout=30_000
         )
+        frame.scroll_into_view_if_needed()
         size = frame.bounding_box()
-        page.evaluate("window.scrollTo(0, 0)")
-        expect(page.get_by_test_id("camera-placeholder")).to_be_hidden(timeout=20_000)
-        shown0 = page.evaluate("performance.now()")
-        n0 = page.evaluate("window.visland.ws.stats.binaryFrames")
-        page.wait_for_timeout(10_000)
-        n1 = page.evaluate("window.visland.ws.stats.binaryFrames")
-        shown1 = page.evaluate("performance.now()")
-        received_fps = (n1 - n0) / ((shown1 - shown0) / 1000)
-        drawn_fps = number_in(page.get_by_test_id("display-fps").inner_text())
+        with_viser = measure_camera(page)
+        page.get_by_test_id("viser-embed").click()  # closed again
         pipeline_fps = station.get("/api/status")[1]["pipeline"]["fps"]
         firsts = []
         for _ in range(5):
@@ -503,10 +513,13 @@ def test_frame_rate_with_the_3d_view_open_and_first_paint(browser, station):
             firsts.append(page.evaluate("window.visland.store.firstStateAt"))
         result = {
             "viewport": "1600x1000",
-            "viser_iframe_px": [round(size["width"]), round(size["height"])],
-            "camera_frames_received_fps": round(received_fps, 2),
-            "camera_frames_drawn_fps": drawn_fps,
             "pipeline_fps": pipeline_fps,
+            "camera_with_dashboard_3d_view": {**with_view3d, "view_in_viewport": view3d_in_view},
+            "camera_with_viser_embedded": {
+                **with_viser,
+                "iframe_px": [round(size["width"]), round(size["height"])],
+                "note": "headless Chromium --disable-gpu: viser's WebGL is drawn by the CPU",
+            },
             "first_state_after_reload_ms": [round(x) for x in firsts],
             "first_state_after_reload_ms_max": round(max(firsts)),
             "bars": {"camera_fps_min": 14, "first_paint_ms_max": 1000},
@@ -514,8 +527,7 @@ def test_frame_rate_with_the_3d_view_open_and_first_paint(browser, station):
         ARTIFACTS.mkdir(exist_ok=True)
         (ARTIFACTS / "dashboard-perf.json").write_text(json.dumps(result, indent=2) + "\n")
         print(json.dumps(result))
-        assert received_fps > 0 and drawn_fps is not None
-        assert size["width"] >= 560, size  # the 3D view is large enough to read
+        assert with_view3d["received_fps"] > 0 and with_view3d["drawn_fps"] is not None
         assert not page.errors, page.errors
     finally:
         context.close()
