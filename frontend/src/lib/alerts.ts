@@ -89,7 +89,9 @@ export function activeAlerts(x: AlertInput): Alert[] {
     out.push({ id: "ekf", level: "critical", title: "EKF failing", detail: "The position estimate is no longer trusted: land or take manual control." });
   }
   const m = x.mission;
-  if (m && (m.outcome === "aborted" || m.outcome === "failed" || m.outcome === "link_lost")) {
+  // an abort the operator asked for is no surprise: the ABORT answer already says so
+  const byOperator = /operator/i.test(m?.message ?? "");
+  if (m && !byOperator && (m.outcome === "aborted" || m.outcome === "failed" || m.outcome === "link_lost")) {
     out.push({
       id: `mission-${m.run_id ?? "?"}-${m.outcome}`,
       level: "warning",

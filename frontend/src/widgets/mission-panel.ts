@@ -251,7 +251,7 @@ export function mountMissionPanel(root: HTMLElement, ctx: Ctx): void {
       setText(
         plnd,
         ready
-          ? `Precision landing is set up on the vehicle: PLND_ENABLED 1, PLND_TYPE 1 (MAVLink), PLND_LAG ${lag ?? "?"} s.`
+          ? `Precision landing is set up on the vehicle: PLND_ENABLED 1, PLND_TYPE 1 (MAVLink), PLND_LAG ${lag === null ? "?" : Number(lag.toPrecision(3))} s.`
           : `Precision landing is off on the vehicle (PLND_ENABLED ${en}, PLND_TYPE ${type}): set it up before landing with the "plnd" strategy.`,
       );
       plnd.dataset.level = ready ? "ok" : "warn";

@@ -42,6 +42,8 @@ describe("activeAlerts", () => {
     const m = activeAlerts({ ...quiet, mission: { run_id: 3, outcome: "aborted", message: "pad not found", kind: "land" } });
     expect(m.map((a) => [a.id, a.title])).toEqual([["mission-3-aborted", "Mission aborted"]]);
     expect(activeAlerts({ ...quiet, mission: { run_id: 4, outcome: "landed", message: "" } })).toEqual([]);
+    // the operator's own abort is no surprise
+    expect(activeAlerts({ ...quiet, mission: { run_id: 5, outcome: "aborted", message: "stopped by the operator's ABORT" } })).toEqual([]);
   });
   it("leaves acknowledged ones out", () => {
     const all = activeAlerts({ ...quiet, linkState: "lost", thresholds, batteryV: 10.9 });
