@@ -25,12 +25,17 @@ from fastapi.staticfiles import StaticFiles
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
+from backend.api.docs import install_docs
 from backend.api.openapi import install_openapi
 from backend.api.routes import (
+    abort,
     flights,
     health,
     missions,
+    params,
+    perspective,
     reference,
+    replay,
     session,
     status,
     telemetry,
@@ -173,6 +178,8 @@ def create_app(settings: Settings | None = None, *, station: Station | None = No
         version=VERSION,
         description="Lands an ArduCopter on an 'H' helipad by machine vision.",
         lifespan=lifespan,
+        docs_url=None,  # served offline by backend.api.docs
+        redoc_url=None,
     )
     app.state.station = None
     app.state.settings = settings
@@ -213,7 +220,11 @@ def create_app(settings: Settings | None = None, *, station: Station | None = No
         reference,
         vehicle,
         flights,
+        replay,
         missions,
+        abort,
+        params,
+        perspective,
         settings_routes,
         session,
     ):
@@ -225,6 +236,7 @@ def create_app(settings: Settings | None = None, *, station: Station | None = No
 
     install_view3d(app)
     install_openapi(app)
+    install_docs(app, FRONTEND_DIST)
 
     if (FRONTEND_DIST / "index.html").is_file():
         app.mount("/", StaticFiles(directory=FRONTEND_DIST, html=True), name="dashboard")

@@ -28,7 +28,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import IO, Any
 
-from backend.encoder import EncodedFrame, splice
+from backend.encoder import EncodedFrame, overlay_for, splice
 from backend.framebus import FrameBus
 from backend.storage import Storage
 
@@ -182,6 +182,8 @@ class Recorder:
                 "t_unix": t_unix,
                 "latency_ms": encoded.processed.latency_ms,
                 "frame": name,
+                # What the dashboard drew over it, for the replay.
+                "overlay": overlay_for(encoded.processed),
             }
             cur.results.write(splice(head, "result", encoded.result_json) + "\n")
             cur.frames += 1

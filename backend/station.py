@@ -39,8 +39,11 @@ from backend.missions.geometry import DOWN_MOUNT
 from backend.missions.manager import MissionManager
 from backend.recorder import Recorder
 from backend.recovery import recover
+from backend.services.abort import AbortService
 from backend.services.events import EventLog
 from backend.services.flights import FlightService
+from backend.services.params import ParamService
+from backend.services.perspective import PerspectiveDrafts
 from backend.services.references import ReferenceService
 from backend.services.rejections import Rejections
 from backend.services.runtime import RuntimeSettings
@@ -95,6 +98,9 @@ class Station:
     viewer_feed: ViewerFeed | None
     status: StatusService
     rejections: Rejections
+    params: ParamService
+    abort: AbortService
+    perspective: PerspectiveDrafts
     started: bool = False
     _stopped: bool = field(default=False, repr=False)
 
@@ -258,6 +264,14 @@ def build_station(settings: Settings) -> Station:
             viser_url=None if viewer is None else viewer.url,
             rejections=rejections,
         )
+        params = ParamService(
+            link,
+            events,
+            latency_ms=lambda: worker.stats.to_dict().get("latency_ms"),
+        )
+        link.subscribe(params.on_link_event)
+        abort = AbortService(link, missions, events)
+        perspective = PerspectiveDrafts(data_dir / "references" / "drafts", references)
         # Whoever sees an event (a flight, a mission's state, the link) then reads a
         # status that shows it; a mission's live state moves the status on its own.
         events.before_each(status.refresh_now)
@@ -290,6 +304,9 @@ def build_station(settings: Settings) -> Station:
         viewer_feed=viewer_feed,
         status=status,
         rejections=rejections,
+        params=params,
+        abort=abort,
+        perspective=perspective,
     )
 
 

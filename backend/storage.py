@@ -194,6 +194,26 @@ class Storage:
                 (ended, frames, INTERRUPTED, flight_id),
             )
 
+    def delete_flight(self, flight_id: int) -> bool:
+        with self._lock:
+            cur = self._db.execute("DELETE FROM flights WHERE id = ?", (flight_id,))
+            return cur.rowcount > 0
+
+    def mission_runs_between(self, t0: float, t1: float) -> list[dict]:
+        """Mission runs that overlap [t0, t1], oldest first, with their records."""
+        with self._lock:
+            rows = self._db.execute(
+                "SELECT * FROM mission_runs WHERE started <= ? AND (ended IS NULL OR ended >= ?) "
+                "ORDER BY id",
+                (t1, t0),
+            ).fetchall()
+        out = []
+        for r in rows:
+            d = dict(r)
+            d["detail"] = json.loads(d.get("detail") or "{}")
+            out.append(d)
+        return out
+
     def get_flight(self, flight_id: int) -> dict | None:
         with self._lock:
             row = self._db.execute("SELECT * FROM flights WHERE id = ?", (flight_id,)).fetchone()

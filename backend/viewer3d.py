@@ -167,6 +167,10 @@ class Viewer3D:
             server = viser.ViserServer(host=self.host, port=self.port, verbose=False)
             self._server = server
             _gate(server, self.proxy_secret)
+            # The dashboard embeds the view and explains it in its own legend: viser's
+            # control panel (empty here) starts folded away, the theme matches the page.
+            server.gui.configure_theme(dark_mode=True, show_logo=False, show_share_button=False)
+            server.gui.main_panel.minimize()
             scene = server.scene
             scene.set_up_direction("+z")
             # Start looking at the pad from the south-west, a few metres up.

@@ -20,8 +20,11 @@ from starlette.requests import HTTPConnection
 from backend.api.security import token_problem
 from backend.api.view_sessions import VIEW_COOKIE, ViewSessions
 from backend.missions.manager import MissionManager
+from backend.services.abort import AbortService
 from backend.services.events import EventLog
 from backend.services.flights import FlightService
+from backend.services.params import ParamService
+from backend.services.perspective import PerspectiveDrafts
 from backend.services.references import ReferenceService
 from backend.services.runtime import RuntimeSettings
 from backend.services.status import StatusService
@@ -75,6 +78,18 @@ def _status(station: StationDep) -> StatusService:
     return station.status
 
 
+def _params(station: StationDep) -> ParamService:
+    return station.params
+
+
+def _abort(station: StationDep) -> AbortService:
+    return station.abort
+
+
+def _perspective(station: StationDep) -> PerspectiveDrafts:
+    return station.perspective
+
+
 EventsDep = Annotated[EventLog, Depends(_events)]
 RuntimeDep = Annotated[RuntimeSettings, Depends(_runtime)]
 ReferencesDep = Annotated[ReferenceService, Depends(_references)]
@@ -82,6 +97,9 @@ FlightsDep = Annotated[FlightService, Depends(_flights)]
 VehicleDep = Annotated[VehicleService, Depends(_vehicle)]
 MissionsDep = Annotated[MissionManager, Depends(_missions)]
 StatusDep = Annotated[StatusService, Depends(_status)]
+ParamsDep = Annotated[ParamService, Depends(_params)]
+AbortDep = Annotated[AbortService, Depends(_abort)]
+PerspectiveDep = Annotated[PerspectiveDrafts, Depends(_perspective)]
 
 # Ids are SQLite integers: anything outside 1..2**63-1 cannot name a row.
 _MAX_ID = 2**63 - 1

@@ -298,6 +298,7 @@ class FlightSummary(Model):
     end_reason: str | None
     tlog: str = Field(description="URL of its .tlog")
     results: str = Field(description="URL of its results (JSON lines)")
+    size_bytes: int = Field(0, description="what its folder takes on disk")
 
 
 class FlightFrame(Model):
@@ -375,4 +376,205 @@ class PublicSettings(Model):
     mavlink: str
     pad_size_m: float
     pad_heading_deg: float
+    pad_north_m: float = Field(0.0, description="the pad centre in the local frame (m)")
+    pad_east_m: float = 0.0
+    camera_hfov_deg: float = Field(60.0, description="the camera's horizontal field of view")
+    camera_aspect: float = Field(4 / 3, description="image width / height")
     simulated_vehicle: bool
+
+
+class FlightDeleted(Model):
+    id: int
+    freed_bytes: int
+
+
+class ReplayFrame(Model):
+    """One processed frame of a recorded flight (UNIX time ``t``)."""
+
+    seq: int
+    t: float
+    url: str | None = Field(description="its recorded JPEG, if frames were kept")
+    detected: bool
+    corners_px: list[Point]
+    contour_px: list[Point]
+    overlay: dict[str, Any] | None
+    position_m: list[float] | None
+    latency_ms: float | None
+    reason: str
+
+
+class ReplaySample(Model):
+    """The vehicle's state at ``t`` (UNIX time), from the flight's .tlog."""
+
+    t: float
+    mode: str | None
+    armed: bool | None
+    n: float | None
+    e: float | None
+    d: float | None
+    roll: float | None
+    pitch: float | None
+    yaw: float | None
+    alt: float | None
+    battery_v: float | None
+
+
+class ReplayText(Model):
+    t: float
+    severity: int
+    text: str
+
+
+class ReplayState(Model):
+    t: float
+    state: str
+    reason: str
+
+
+class ReplayMission(Model):
+    id: int
+    kind: str
+    strategy: str | None
+    outcome: str | None
+    started: float
+    ended: float | None
+    states: list[ReplayState]
+
+
+class FlightReplay(Model):
+    """A recorded flight as one timeline: frames, telemetry, texts and mission states."""
+
+    id: int
+    t0: float
+    t1: float
+    frames: list[ReplayFrame]
+    telemetry: list[ReplaySample]
+    texts: list[ReplayText]
+    missions: list[ReplayMission]
+
+
+# --- vehicle parameters, ABORT ------------------------------------------------------------
+class ParamInfo(Model):
+    """One vehicle parameter, with ArduCopter's documentation where known."""
+
+    name: str
+    value: float
+    type: int = Field(description="MAV_PARAM_TYPE")
+    integer: bool
+    description: str
+    units: str
+    low: float | None
+    high: float | None
+    values: dict[str, str] = Field(description="the documented choices, value -> meaning")
+    reboot: bool = Field(description="takes effect after a reboot")
+
+
+class ParamListing(Model):
+    count: int = Field(description="how many parameters the vehicle says it has")
+    received: int
+    complete: bool
+    fetched_at: float | None
+    params: list[ParamInfo]
+
+
+class ParamWriteResult(Model):
+    """A parameter write: what was there, what was asked, what the vehicle said."""
+
+    name: str
+    old: float | None
+    value: float
+    ok: bool
+    detail: str
+
+
+class PrecLandSetup(Model):
+    ok: bool
+    lag_s: float = Field(description="PLND_LAG written (s)")
+    latency_ms: float | None = Field(description="the measured capture -> result latency")
+    writes: list[ParamWriteResult]
+    reboot: CommandResult | None
+    detail: str
+
+
+class BatteryThresholds(Model):
+    """The vehicle's BATT_* thresholds (null: no such parameter, or not read yet)."""
+
+    BATT_LOW_VOLT: float | None
+    BATT_CRT_VOLT: float | None
+    BATT_LOW_MAH: float | None
+    BATT_CRT_MAH: float | None
+    BATT_CAPACITY: float | None
+
+
+class SentCommand(Model):
+    command: str
+    ok: bool
+    result_name: str
+    detail: str
+    reasons: list[str]
+
+
+class AbortResult(Model):
+    """What ABORT did: the mission it stopped and every command it sent."""
+
+    ok: bool
+    mission: MissionSnapshot | None
+    sent: list[SentCommand]
+    detail: str = Field(description="one sentence: what was sent, or why nothing was")
+
+
+class MissionField(Model):
+    name: str
+    title: str
+    description: str
+    default: Any
+    kind: Literal["number", "choice"]
+    minimum: float | None = None
+    maximum: float | None = None
+    exclusive_minimum: float | None = None
+    unit: str = ""
+    choices: list[str] = Field(default_factory=list)
+    computed: bool = Field(
+        False, description="the default is worked out by the station for its pad and camera"
+    )
+
+
+class MissionDefaults(Model):
+    """Every mission parameter the operator may set, with its default and bounds."""
+
+    hover: list[MissionField]
+    land: list[MissionField]
+
+
+# --- a reference from a perspective photo -------------------------------------------------
+class PadOutline(Model):
+    """The suggested pad outline in the photo's pixels (corners TL, TR, BR, BL)."""
+
+    quad: list[Point]
+    ellipse: list[Point] | None = Field(description="the square around a round pad, in view")
+    kind: Literal["quad", "ellipse", "h_box"]
+    h_box: list[int] | None = Field(description="x, y, w, h of the H-like region found")
+
+
+class PerspectivePhoto(Model):
+    id: str
+    name: str
+    width: int
+    height: int
+    photo: str = Field(description="URL of the photo")
+    outline: PadOutline
+
+
+class PerspectivePreview(Model):
+    """The rectified picture and what was measured on it; not active until activated."""
+
+    id: str
+    draft: str
+    pad_size_m: float
+    aspect: float
+    corners: list[Point]
+    image: str = Field(description="URL of the rectified picture")
+    corners_image: str = Field(description="URL of it with the H's corners drawn")
+    h_corners: int
+    symmetric: bool
+    detail: str

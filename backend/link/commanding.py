@@ -204,6 +204,22 @@ class LinkCommands(LinkCore):
             return None
         return None if got is None else got[0]
 
+    def request_param_list(self) -> CommandResult:
+        """Ask for every parameter (PARAM_REQUEST_LIST); they arrive as PARAM_VALUEs.
+
+        Not acknowledged: ``ok`` means sent. :meth:`param_table` fills as they come.
+        """
+        target = self._target or (1, 1)
+        msg = mavlink2.MAVLink_param_request_list_message(target[0], target[1])
+        return self._send_unacked("param_request_list", msg)
+
+    def param_table(self) -> tuple[dict[str, tuple[float, int]], int]:
+        """Every parameter heard so far, name -> (value, MAV_PARAM_TYPE), and how many
+        the vehicle says it has (0 before its first PARAM_VALUE)."""
+        with self._param_cond:
+            table = {name: (v[0], v[1]) for name, v in self._params.items()}
+            return table, self._param_count
+
     def set_param(self, name: str, value: float) -> CommandResult:
         """Write one parameter (PARAM_SET), verified by the vehicle's PARAM_VALUE echo."""
         label = f"set_param {name}"

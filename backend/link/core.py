@@ -75,6 +75,7 @@ class LinkCore:
     _command_locks_guard: threading.Lock
     _param_cond: threading.Condition
     _params: dict[str, tuple[float, int, float]]
+    _param_count: int
     _statustexts: StatusTextAssembler
     _landing_targets: int
     _subscribers: tuple[Callable[[LinkEvent], None], ...]

@@ -182,4 +182,8 @@ class LinkReceiver(LinkCore):
                 int(msg.param_type),
                 time.monotonic(),
             )
+            # The vehicle's count of parameters (the table is whole when we hold them all).
+            count = int(getattr(msg, "param_count", 0) or 0)
+            if 0 < count < 0xFFFF:
+                self._param_count = count
             self._param_cond.notify_all()

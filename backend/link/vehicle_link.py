@@ -164,6 +164,7 @@ class VehicleLink(LinkCommands, LinkReceiver, LinkHousekeeping):
         self._command_locks_guard = threading.Lock()
         self._param_cond = threading.Condition()
         self._params: dict[str, tuple[float, int, float]] = {}  # name -> value, type, rx time
+        self._param_count = 0  # how many parameters the vehicle says it has
         self._statustexts = StatusTextAssembler()
         self._landing_targets = 0
 

@@ -52,6 +52,7 @@ class LandMission(Mission):
         self._centred_count = 0
         self._last_goto = -math.inf
         self._search_alt: float | None = None
+        self._land_accepted = False
 
     # --- states -----------------------------------------------------------------------------
     def _s_start(self, now: float, tel: Telemetry) -> None:
@@ -240,15 +241,17 @@ class LandMission(Mission):
             else:
                 self._send_predicted_target(tel)
             return
-        if tel.mode == "LAND":
+        # LAND is asked for once: the mode in telemetry comes with the 1 Hz HEARTBEAT, so
+        # it reads GUIDED for up to a second after the vehicle accepted LAND.
+        if tel.mode == "LAND" or self._land_accepted:
             return
         height = self._height(tel)
         p = tel.position_ned
         if height is None or p is None or self.pad_est is None:
-            self._mode("LAND")
+            self._land_accepted = self._mode("LAND")
             return
         if height <= TOUCHDOWN_M or now - self.state_since > FINAL_GUIDED_S:
-            self._mode("LAND")  # LAND finishes the touchdown and disarms
+            self._land_accepted = self._mode("LAND")  # LAND touches down and disarms
             return
         c = self.config
         vn = c.gain_xy * (self.pad_est[0] - p.x)

@@ -107,13 +107,17 @@ class MissionManager:
         """Start a hover; raises :class:`MissionBusy` when one runs."""
         return self._start(lambda now, cb: HoverMission(self.link, config, now=now, on_change=cb))
 
-    def abort(self, reason: str = "operator abort") -> dict | None:
-        """Abort the running mission (acted on at once); None when none runs."""
+    def abort(self, reason: str = "operator abort", *, hand_over: bool = False) -> dict | None:
+        """Abort the running mission (acted on at once); None when none runs.
+
+        ``hand_over``: the mission ends without commanding the vehicle (the caller
+        holds it: the station's ABORT); otherwise it switches to its abort mode.
+        """
         with self._lock:
             mission = self._mission
         if mission is None or mission.done:
             return None
-        mission.abort(reason)
+        mission.abort(reason, hand_over=hand_over)
         self._results.nudge()  # acted on now, not at the next result
         thread = self._thread
         if thread is not None and thread is not threading.current_thread():

@@ -110,6 +110,7 @@ class Mission:
         self._touchdown_truth = touchdown_truth
         self._on_change = on_change
         self._abort: str | None = None
+        self._hand_over = False
         self._seen_armed = False
         self._abort_lock = threading.Lock()
         self.record = RunRecord(
@@ -134,11 +135,16 @@ class Mission:
     def outcome(self) -> str | None:
         return self.record.outcome
 
-    def abort(self, reason: str = "operator abort") -> None:
-        """Ask for an abort (any thread); acted on at the next ``step``."""
+    def abort(self, reason: str = "operator abort", *, hand_over: bool = False) -> None:
+        """Ask for an abort (any thread); acted on at the next ``step``.
+
+        ``hand_over``: end without commanding anything (whoever asked holds the vehicle,
+        as the station's ABORT does); otherwise switch to ``abort_mode``.
+        """
         with self._abort_lock:
             if self._abort is None:
                 self._abort = reason
+                self._hand_over = hand_over
 
     def step(self, now: float, sample: VisionSample | None = None) -> None:
         """Advance the mission to ``now`` with the newest vision result (if any)."""
@@ -153,7 +159,10 @@ class Mission:
         with self._abort_lock:
             reason = self._abort
         if reason is not None:
-            self._do_abort(reason)
+            if self._hand_over:
+                self._end("aborted", reason)
+            else:
+                self._do_abort(reason)
             return
         if tel.state != LinkState.UP:
             # Nothing we send can arrive: the vehicle's own failsafe (FS_GCS_ENABLE) decides.

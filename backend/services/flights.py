@@ -7,16 +7,23 @@ database: the routes call it from worker threads, never on the event loop.
 
 from __future__ import annotations
 
+import shutil
+import time
 from pathlib import Path
 from typing import Any
 
 from backend.link import LinkEvent
 from backend.recorder import Recorder
+from backend.services import replay
 from backend.storage import Storage
 
 
 class NoSuchFlight(LookupError):
     """No flight with that id (or without the file asked for)."""
+
+
+class FlightBusy(RuntimeError):
+    """The flight is still being recorded."""
 
 
 class FlightService:
@@ -87,3 +94,45 @@ class FlightService:
         if not path.is_file():
             raise NoSuchFlight(f"Flight {flight_id} has no frame {seq}.")
         return path
+
+    def size_bytes(self, row: dict[str, Any]) -> int:
+        """Bytes the flight's folder takes on disk (0 when it is gone)."""
+        folder = Path(row["dir"]) if row.get("dir") else None
+        if folder is None or not folder.is_dir():
+            return 0
+        return sum(p.stat().st_size for p in folder.rglob("*") if p.is_file())
+
+    def delete(self, flight_id: int) -> dict[str, Any]:
+        """Delete a flight's folder and row; :class:`FlightBusy` while it is recorded."""
+        row = self.get(flight_id)
+        current = self._recorder.current
+        if current is not None and current["id"] == flight_id:
+            raise FlightBusy(f"Flight {flight_id} is being recorded; stop it before deleting.")
+        size = self.size_bytes(row)
+        if row.get("dir"):
+            shutil.rmtree(row["dir"], ignore_errors=True)
+        self._storage.delete_flight(flight_id)
+        return {"id": flight_id, "freed_bytes": size}
+
+    def replay(self, flight_id: int) -> dict[str, Any]:
+        """The flight as one timeline (:mod:`backend.services.replay`)."""
+        row = self.get(flight_id)
+        folder = self.folder(flight_id)
+        self._recorder.write_tlog_now(flight_id)
+        frames = replay.read_results(folder / "results.jsonl", flight_id)
+        telemetry, texts = replay.read_tlog(folder / "flight.tlog")
+        t0 = row["started"]
+        t1 = row["ended"] or time.time()
+        times = [f["t"] for f in frames] + [s["t"] for s in telemetry]
+        if times:
+            t0, t1 = min(t0, min(times)), max(t1, max(times))
+        runs = self._storage.mission_runs_between(t0, t1)
+        return {
+            "id": flight_id,
+            "t0": t0,
+            "t1": t1,
+            "frames": frames,
+            "telemetry": telemetry,
+            "texts": texts,
+            "missions": replay.mission_states(runs),
+        }

@@ -73,5 +73,9 @@ class RuntimeSettings:
             "mavlink": self.mavlink_url,
             "pad_size_m": s.pad_size,
             "pad_heading_deg": s.pad_heading_deg,
+            "pad_north_m": s.pad_north,
+            "pad_east_m": s.pad_east,
+            "camera_hfov_deg": s.camera_hfov_deg,
+            "camera_aspect": 4 / 3,
             "simulated_vehicle": s.mavlink is None,
         }

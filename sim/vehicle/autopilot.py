@@ -94,6 +94,8 @@ class SimVehicle(FlightModes):
         self.landed_at: tuple[float, float] | None = None
         self._texts: list[tuple[int, str]] = []
         self.nav = Navigation(self.params, config.seed)
+        self._battery_levels: set[str] = set()  # failsafe levels announced
+        self._battery_timers: dict[str, float] = {}
         self._boot()
 
     # ------------------------------------------------------------------ boot, state
@@ -672,10 +674,42 @@ class SimVehicle(FlightModes):
             self._last_ground_t = self.time_s
         # Battery.
         self.battery_mah_used += self.battery_current_a * dt / 3.6
+        self._battery_monitor(dt)
         if not self.armed:
             return
         self._land_detector(dt)
         self._auto_disarm(dt)
+
+    def _battery_monitor(self, dt: float) -> None:
+        """AP_BattMonitor's failsafe levels: below BATT_LOW_VOLT (or BATT_CRT_VOLT) for
+        BATT_LOW_TIMER s, or less than BATT_LOW_MAH (BATT_CRT_MAH) left, once each; the
+        action is BATT_FS_LOW_ACT / BATT_FS_CRT_ACT (1 Land, 2 RTL), as ArduCopter does."""
+        p = self.params
+        volts = self.battery_voltage
+        left = p.get("BATT_CAPACITY") - self.battery_mah_used
+        for level, volt_name, mah_name, action_name in (
+            ("critical", "BATT_CRT_VOLT", "BATT_CRT_MAH", "BATT_FS_CRT_ACT"),
+            ("low", "BATT_LOW_VOLT", "BATT_LOW_MAH", "BATT_FS_LOW_ACT"),
+        ):
+            if level in self._battery_levels:
+                return
+            limit, mah = p.get(volt_name), p.get(mah_name)
+            under = limit > 0 and volts < limit
+            timer = self._battery_timers.get(level, 0.0) + dt if under else 0.0
+            self._battery_timers[level] = timer
+            if (under and timer >= max(0.0, p.get("BATT_LOW_TIMER"))) or (mah > 0 and left < mah):
+                self._battery_levels.add(level)
+                if level == "critical":
+                    self._battery_levels.add("low")
+                self._text(
+                    SEV_CRITICAL,
+                    f"Battery 1 is {level} {volts:.2f}V used {self.battery_mah_used:.0f} mAh",
+                )
+                action = int(p.get(action_name))
+                if self.armed and action in (1, 2):
+                    self._text(SEV_WARNING, "Battery Failsafe")
+                    self.set_mode(LAND if action == 1 else RTL)
+                return
 
     def _land_detector(self, dt: float) -> None:
         """ArduCopter's land detector: throttle at its lower limit, not accelerating,

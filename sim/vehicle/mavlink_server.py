@@ -37,6 +37,9 @@ from sim.vehicle.transport import Transport, make_transport
 log = logging.getLogger(__name__)
 
 JOIN_TIMEOUT_S = 5.0
+#: How long the autopilot is silent while it reboots (sim seconds; ArduCopter on a
+#: flight controller takes a few).
+REBOOT_SILENCE_S = 3.0
 MIN_INTERVAL_S = 0.0025  # 400 Hz: no message faster than the main loop
 SIGNING_EPOCH = 1420070400  # 2015-01-01, MAVLink signing timestamps count from here
 
@@ -96,6 +99,7 @@ class VehicleServer:
         self._threads: list[threading.Thread] = []
         self._lock = threading.RLock()  # one thread at a time steps the sim and sends
         self._home_sent: tuple[float, float, float] | None = None  # home last announced
+        self._silent_until = -math.inf
         self._param_queue: deque[int] = deque()
         self._started = False
         self.address = ""
@@ -244,6 +248,9 @@ class VehicleServer:
 
     def _emit_due(self) -> None:
         now = self.sim.time_s
+        if now < self._silent_until:  # rebooting: nothing comes out
+            self.sim.drain_texts()
+            return
         for severity, text in self.sim.drain_texts():
             self._send(self._mav.statustext_encode(severity, text.encode()[:50]))
         if self.sim.home_set and self._home_sent != self.sim.home_ned:
@@ -325,6 +332,8 @@ class VehicleServer:
     def _handle_inbox(self) -> None:
         while self._inbox:
             msg = self._inbox.popleft()
+            if self.sim.time_s < self._silent_until:
+                continue  # rebooting: nothing is heard
             handler = self._handlers.get(msg.get_type())
             if handler is None:
                 continue
@@ -444,6 +453,7 @@ class VehicleServer:
             self._ack(msg, command, ACCEPTED)
             sim.reboot()
             self._home_sent = None
+            self._silent_until = sim.time_s + REBOOT_SILENCE_S
             return None
         return UNSUPPORTED
 

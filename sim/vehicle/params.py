@@ -73,6 +73,13 @@ _DEFAULTS: tuple[tuple[str, float, int], ...] = (
     ("MOT_SPOOL_TIME", 0.5, _F),
     ("BATT_MONITOR", 4, _I8),
     ("BATT_CAPACITY", 3300, _I32),
+    ("BATT_LOW_VOLT", 10.5, _F),
+    ("BATT_CRT_VOLT", 0, _F),
+    ("BATT_LOW_MAH", 0, _F),
+    ("BATT_CRT_MAH", 0, _F),
+    ("BATT_LOW_TIMER", 10, _I8),
+    ("BATT_FS_LOW_ACT", 0, _I8),
+    ("BATT_FS_CRT_ACT", 0, _I8),
     # SITL's copter.parm configures no rangefinder (0); 100 would be a SITL one.
     ("RNGFND1_TYPE", 0, _I8),
     ("RNGFND1_MIN_CM", 20, _I16),

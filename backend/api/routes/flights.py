@@ -10,15 +10,15 @@ from fastapi.responses import FileResponse
 
 from backend.api.deps import FlightId, FlightsDep, Operator, Viewer
 from backend.api.errors import OPERATOR_ERRORS, VIEWER_ERRORS, errors
-from backend.api.schemas import FlightFrame, FlightRef, FlightSummary
-from backend.services.flights import NoSuchFlight
+from backend.api.schemas import FlightDeleted, FlightFrame, FlightRef, FlightSummary
+from backend.services.flights import FlightBusy, FlightService, NoSuchFlight
 
 router = APIRouter(prefix="/flights", tags=["flights"])
 
 _FRAME_RE = re.compile(r"^\d{1,9}$")
 
 
-def _summary(row: dict[str, Any]) -> dict[str, Any]:
+def _summary(row: dict[str, Any], flights: FlightService) -> dict[str, Any]:
     fid = row["id"]
     return {
         "id": fid,
@@ -29,6 +29,7 @@ def _summary(row: dict[str, Any]) -> dict[str, Any]:
         "end_reason": row["end_reason"],
         "tlog": f"/api/flights/{fid}/tlog",
         "results": f"/api/flights/{fid}/results",
+        "size_bytes": flights.size_bytes(row),
     }
 
 
@@ -38,7 +39,7 @@ def _not_found(exc: NoSuchFlight) -> HTTPException:
 
 @router.get("", dependencies=[Viewer], response_model=list[FlightSummary], responses=VIEWER_ERRORS)
 def list_flights(flights: FlightsDep) -> list[dict[str, Any]]:
-    return [_summary(r) for r in flights.rows()]
+    return [_summary(r, flights) for r in flights.rows()]
 
 
 @router.post("/start", dependencies=[Operator], response_model=FlightRef, responses=OPERATOR_ERRORS)
@@ -68,9 +69,25 @@ def stop_flight(flights: FlightsDep) -> dict[str, Any]:
 )
 def get_flight(flight_id: FlightId, flights: FlightsDep) -> dict[str, Any]:
     try:
-        return _summary(flights.get(flight_id))
+        return _summary(flights.get(flight_id), flights)
     except NoSuchFlight as exc:
         raise _not_found(exc) from None
+
+
+@router.delete(
+    "/{flight_id}",
+    dependencies=[Operator],
+    response_model=FlightDeleted,
+    responses={**OPERATOR_ERRORS, **errors(404, 409, 422)},
+)
+def delete_flight(flight_id: FlightId, flights: FlightsDep) -> dict[str, Any]:
+    """Delete a flight: its folder (tlog, frames, results) and its row."""
+    try:
+        return flights.delete(flight_id)
+    except NoSuchFlight as exc:
+        raise _not_found(exc) from None
+    except FlightBusy as exc:
+        raise HTTPException(status.HTTP_409_CONFLICT, str(exc)) from None
 
 
 @router.get(

@@ -10,12 +10,18 @@ from __future__ import annotations
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Body, HTTPException, status
-from pydantic import Field
+from pydantic import BaseModel, Field
 
 from backend.api.bodies import StrictBody
 from backend.api.deps import MissionsDep, Operator, RunId, VehicleDep, Viewer
 from backend.api.errors import OPERATOR_ERRORS, VIEWER_ERRORS, errors
-from backend.api.schemas import MissionCommand, MissionRun, MissionRunSummary, MissionSnapshot
+from backend.api.schemas import (
+    MissionCommand,
+    MissionDefaults,
+    MissionRun,
+    MissionRunSummary,
+    MissionSnapshot,
+)
 from backend.missions import HoverConfig
 from backend.missions.manager import MissionBusy
 from backend.services.vehicle import VehicleService
@@ -25,24 +31,75 @@ router = APIRouter(prefix="/missions", tags=["missions"])
 _COMMAND_ERRORS = {**OPERATOR_ERRORS, **errors(409, 422)}
 
 
+_ABORT_DOC = (
+    "where the mission leaves the vehicle when it gives up (LOITER holds in GUIDED instead "
+    "when no pilot holds the throttle)"
+)
+
+
 class HoverRequest(StrictBody):
-    altitude_m: float = Field(4.0, ge=1, le=100, description="hover height above home (m)")
-    hold_s: float = Field(20.0, gt=0, le=3600, description="how long to hold over the pad")
-    abort_mode: Literal["LOITER", "RTL"] = "LOITER"
+    altitude_m: float = Field(
+        4.0, ge=1, le=100, title="Altitude", description="hover height above home (m)"
+    )
+    hold_s: float = Field(
+        20.0, gt=0, le=3600, title="Hold time", description="how long to hold over the pad (s)"
+    )
+    abort_mode: Literal["LOITER", "RTL"] = Field(
+        "LOITER", title="If it gives up", description=_ABORT_DOC
+    )
 
 
 class LandRequest(StrictBody):
-    strategy: Literal["plnd", "guided"] = "plnd"
+    strategy: Literal["plnd", "guided"] = Field(
+        "plnd",
+        title="Strategy",
+        description="plnd: ArduCopter's precision landing fed LANDING_TARGET; guided: GUIDED "
+        "velocity targets from the vision pose",
+    )
     approach_alt_m: float | None = Field(
         None,
         ge=1,
         le=50,
-        description="height to look for the pad from; by default a margin under where "
+        title="Approach height",
+        description="height to look for the pad from (m); by default a margin under where "
         "the active pad is still reliably found with this camera",
     )
-    abort_mode: Literal["LOITER", "RTL"] = "LOITER"
-    lost_timeout_s: float = Field(5.0, gt=0, le=120)
-    search_s: float = Field(8.0, gt=0, le=600)
+    abort_mode: Literal["LOITER", "RTL"] = Field(
+        "LOITER", title="If it gives up", description=_ABORT_DOC
+    )
+    lost_timeout_s: float = Field(
+        5.0,
+        gt=0,
+        le=120,
+        title="Lost timeout",
+        description="pad unseen this long: climb and search (s)",
+    )
+    search_s: float = Field(
+        8.0, gt=0, le=600, title="Search time", description="search this long, then abort (s)"
+    )
+
+
+def form_fields(model: type[BaseModel]) -> list[dict[str, Any]]:
+    """The request model's fields as the dashboard's form shows them."""
+    schema = model.model_json_schema()
+    out = []
+    for name, prop in schema["properties"].items():
+        # an optional number (``float | None``) keeps its bounds in the non-null branch
+        prop = {**next((p for p in prop.get("anyOf", []) if p.get("type") != "null"), {}), **prop}
+        field: dict[str, Any] = {
+            "name": name,
+            "title": prop.get("title", name),
+            "description": prop.get("description", ""),
+            "default": prop.get("default"),
+            "kind": "choice" if "enum" in prop else "number",
+            "choices": [str(c) for c in prop.get("enum", [])],
+            "minimum": prop.get("minimum"),
+            "maximum": prop.get("maximum"),
+            "exclusive_minimum": prop.get("exclusiveMinimum"),
+            "unit": "s" if name.endswith("_s") else "m" if name.endswith("_m") else "",
+        }
+        out.append(field)
+    return out
 
 
 def _check_link(vehicle: VehicleService) -> None:
@@ -141,6 +198,25 @@ def current(missions: MissionsDep) -> dict[str, Any] | None:
 def history(missions: MissionsDep) -> list[dict[str, Any]]:
     """Stored runs, newest first, with their outcomes and touchdown errors."""
     return missions.history()
+
+
+@router.get(
+    "/defaults", dependencies=[Viewer], response_model=MissionDefaults, responses=VIEWER_ERRORS
+)
+def defaults(vehicle: VehicleDep) -> dict[str, Any]:
+    """Every mission parameter with its default and bounds (the dashboard's forms).
+
+    The approach height's default is computed for the active pad and camera: a margin
+    under the height up to which that pad is still reliably found. A form that leaves it
+    unchanged omits it, so the pad active when the mission starts decides.
+    """
+    land = form_fields(LandRequest)
+    computed = vehicle.approach_altitude_m()
+    for field in land:
+        if field["name"] == "approach_alt_m" and computed is not None:
+            field.update(default=computed, computed=True)
+            field["description"] += f" (now {computed:g} m for the active pad)"
+    return {"hover": form_fields(HoverRequest), "land": land}
 
 
 @router.get(

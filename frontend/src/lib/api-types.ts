@@ -4,6 +4,26 @@
  */
 
 export interface paths {
+    "/api/abort": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Abort
+         * @description Stop any mission and hold the vehicle where it is; says what was sent.
+         */
+        post: operations["abort_api_abort_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/flights": {
         parameters: {
             query?: never;
@@ -69,7 +89,11 @@ export interface paths {
         get: operations["get_flight_api_flights__flight_id__get"];
         put?: never;
         post?: never;
-        delete?: never;
+        /**
+         * Delete Flight
+         * @description Delete a flight: its folder (tlog, frames, results) and its row.
+         */
+        delete: operations["delete_flight_api_flights__flight_id__delete"];
         options?: never;
         head?: never;
         patch?: never;
@@ -101,6 +125,26 @@ export interface paths {
         };
         /** Flight Frame */
         get: operations["flight_frame_api_flights__flight_id__frames__name__get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/flights/{flight_id}/replay": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Flight Replay
+         * @description Frames, telemetry, texts and mission states of one flight, for replay.
+         */
+        get: operations["flight_replay_api_flights__flight_id__replay_get"];
         put?: never;
         post?: never;
         delete?: never;
@@ -223,6 +267,30 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/missions/defaults": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Defaults
+         * @description Every mission parameter with its default and bounds (the dashboard's forms).
+         *
+         *     The approach height's default is computed for the active pad and camera: a margin
+         *     under the height up to which that pad is still reliably found. A form that leaves it
+         *     unchanged omits it, so the pad active when the mission starts decides.
+         */
+        get: operations["defaults_api_missions_defaults_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/missions/hover": {
         parameters: {
             query?: never;
@@ -283,6 +351,107 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/params": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * List Params
+         * @description The parameters heard so far (``complete`` once the vehicle sent them all).
+         */
+        get: operations["list_params_api_params_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/params/battery": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Battery Thresholds
+         * @description The BATT_* thresholds the dashboard's battery alerts use (null when absent).
+         */
+        get: operations["battery_thresholds_api_params_battery_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/params/precland-setup": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Precland Setup
+         * @description PLND_ENABLED 1, PLND_TYPE 1 (MAVLink), PLND_EST_TYPE 1, PLND_LAG from the measured
+         *     latency, PLND_ORIENT down, PLND_CAM_POS_* the camera's mount; then reboot.
+         */
+        post: operations["precland_setup_api_params_precland_setup_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/params/refresh": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Refresh Params
+         * @description Download every parameter from the vehicle (PARAM_REQUEST_LIST); up to 20 s.
+         */
+        post: operations["refresh_params_api_params_refresh_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/params/{name}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        /**
+         * Write Param
+         * @description Write one parameter, checked against its type and documented range first.
+         */
+        put: operations["write_param_api_params__name__put"];
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/reference": {
         parameters: {
             query?: never;
@@ -302,6 +471,102 @@ export interface paths {
          *     The previous reference stays active on any failure.
          */
         post: operations["upload_reference_api_reference_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/reference/perspective": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Upload Photo
+         * @description Keep the photo as a draft and suggest the pad's outline; nothing becomes active.
+         */
+        post: operations["upload_photo_api_reference_perspective_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/reference/perspective/{draft_id}/photo": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** Draft Photo */
+        get: operations["draft_photo_api_reference_perspective__draft_id__photo_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/reference/perspective/{draft_id}/preview": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Preview
+         * @description Rectify with the four corners and measure the H; nothing becomes active.
+         *
+         *     422 when the corners do not outline the pad or no usable H is on the result.
+         */
+        post: operations["preview_api_reference_perspective__draft_id__preview_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/reference/perspective/{draft_id}/previews/{name}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** Preview Image */
+        get: operations["preview_image_api_reference_perspective__draft_id__previews__name__get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/reference/perspective/{draft_id}/previews/{preview_id}/activate": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Activate
+         * @description Make the previewed, rectified picture the active reference.
+         */
+        post: operations["activate_api_reference_perspective__draft_id__previews__preview_id__activate_post"];
         delete?: never;
         options?: never;
         head?: never;
@@ -524,6 +789,28 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/vehicle/reboot": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Reboot
+         * @description Reboot the autopilot (MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN); refused while armed.
+         *
+         *     The link goes lost while it restarts and comes back by itself.
+         */
+        post: operations["reboot_api_vehicle_reboot_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/vehicle/rtl": {
         parameters: {
             query?: never;
@@ -562,6 +849,22 @@ export interface paths {
 export type webhooks = Record<string, never>;
 export interface components {
     schemas: {
+        /**
+         * AbortResult
+         * @description What ABORT did: the mission it stopped and every command it sent.
+         */
+        AbortResult: {
+            /**
+             * Detail
+             * @description one sentence: what was sent, or why nothing was
+             */
+            detail: string;
+            mission: components["schemas"]["MissionSnapshot"] | null;
+            /** Ok */
+            ok: boolean;
+            /** Sent */
+            sent: components["schemas"]["SentCommand"][];
+        };
         /** Attitude */
         Attitude: {
             /** Pitch */
@@ -623,6 +926,22 @@ export interface components {
             voltage_v: number | null;
         };
         /**
+         * BatteryThresholds
+         * @description The vehicle's BATT_* thresholds (null: no such parameter, or not read yet).
+         */
+        BatteryThresholds: {
+            /** Batt Capacity */
+            BATT_CAPACITY: number | null;
+            /** Batt Crt Mah */
+            BATT_CRT_MAH: number | null;
+            /** Batt Crt Volt */
+            BATT_CRT_VOLT: number | null;
+            /** Batt Low Mah */
+            BATT_LOW_MAH: number | null;
+            /** Batt Low Volt */
+            BATT_LOW_VOLT: number | null;
+        };
+        /**
          * BinaryFrameHeader
          * @description The JSON header of a binary message; the JPEG bytes follow it.
          */
@@ -640,6 +959,14 @@ export interface components {
             t_capture: number;
             /** Width */
             width: number;
+        };
+        /** Body_upload_photo_api_reference_perspective_post */
+        Body_upload_photo_api_reference_perspective_post: {
+            /**
+             * File
+             * @description a photo of the pad lying on the ground
+             */
+            file: string;
         };
         /** Body_upload_reference_api_reference_post */
         Body_upload_reference_api_reference_post: {
@@ -752,6 +1079,13 @@ export interface components {
         } & {
             [key: string]: unknown;
         };
+        /** FlightDeleted */
+        FlightDeleted: {
+            /** Freed Bytes */
+            freed_bytes: number;
+            /** Id */
+            id: number;
+        };
         /** FlightFrame */
         FlightFrame: {
             /** Seq */
@@ -768,6 +1102,26 @@ export interface components {
             dir: string;
             /** Id */
             id: number;
+        };
+        /**
+         * FlightReplay
+         * @description A recorded flight as one timeline: frames, telemetry, texts and mission states.
+         */
+        FlightReplay: {
+            /** Frames */
+            frames: components["schemas"]["ReplayFrame"][];
+            /** Id */
+            id: number;
+            /** Missions */
+            missions: components["schemas"]["ReplayMission"][];
+            /** T0 */
+            t0: number;
+            /** T1 */
+            t1: number;
+            /** Telemetry */
+            telemetry: components["schemas"]["ReplaySample"][];
+            /** Texts */
+            texts: components["schemas"]["ReplayText"][];
         };
         /** FlightSummary */
         FlightSummary: {
@@ -786,6 +1140,12 @@ export interface components {
              * @description URL of its results (JSON lines)
              */
             results: string;
+            /**
+             * Size Bytes
+             * @description what its folder takes on disk
+             * @default 0
+             */
+            size_bytes: number;
             /** Started */
             started: number;
             /**
@@ -905,20 +1265,21 @@ export interface components {
         /** HoverRequest */
         HoverRequest: {
             /**
-             * Abort Mode
+             * If it gives up
+             * @description where the mission leaves the vehicle when it gives up (LOITER holds in GUIDED instead when no pilot holds the throttle)
              * @default LOITER
              * @enum {string}
              */
             abort_mode: "LOITER" | "RTL";
             /**
-             * Altitude M
+             * Altitude
              * @description hover height above home (m)
              * @default 4
              */
             altitude_m: number;
             /**
-             * Hold S
-             * @description how long to hold over the pad
+             * Hold time
+             * @description how long to hold over the pad (s)
              * @default 20
              */
             hold_s: number;
@@ -926,28 +1287,32 @@ export interface components {
         /** LandRequest */
         LandRequest: {
             /**
-             * Abort Mode
+             * If it gives up
+             * @description where the mission leaves the vehicle when it gives up (LOITER holds in GUIDED instead when no pilot holds the throttle)
              * @default LOITER
              * @enum {string}
              */
             abort_mode: "LOITER" | "RTL";
             /**
-             * Approach Alt M
-             * @description height to look for the pad from; by default a margin under where the active pad is still reliably found with this camera
+             * Approach height
+             * @description height to look for the pad from (m); by default a margin under where the active pad is still reliably found with this camera
              */
             approach_alt_m?: number | null;
             /**
-             * Lost Timeout S
+             * Lost timeout
+             * @description pad unseen this long: climb and search (s)
              * @default 5
              */
             lost_timeout_s: number;
             /**
-             * Search S
+             * Search time
+             * @description search this long, then abort (s)
              * @default 8
              */
             search_s: number;
             /**
              * Strategy
+             * @description plnd: ArduCopter's precision landing fed LANDING_TARGET; guided: GUIDED velocity targets from the vision pose
              * @default plnd
              * @enum {string}
              */
@@ -1027,6 +1392,51 @@ export interface components {
              * @description ACCEPTED, FAILED, ... or LINK_DOWN, TIMEOUT, INVALID_ARGUMENT, SENT, SEND_FAILED, MISMATCH, STARTED, ABORTED
              */
             result_name: string;
+        };
+        /**
+         * MissionDefaults
+         * @description Every mission parameter the operator may set, with its default and bounds.
+         */
+        MissionDefaults: {
+            /** Hover */
+            hover: components["schemas"]["MissionField"][];
+            /** Land */
+            land: components["schemas"]["MissionField"][];
+        };
+        /** MissionField */
+        MissionField: {
+            /** Choices */
+            choices?: string[];
+            /**
+             * Computed
+             * @description the default is worked out by the station for its pad and camera
+             * @default false
+             */
+            computed: boolean;
+            /** Default */
+            default: unknown;
+            /** Description */
+            description: string;
+            /** Exclusive Minimum */
+            exclusive_minimum?: number | null;
+            /**
+             * Kind
+             * @enum {string}
+             */
+            kind: "number" | "choice";
+            /** Maximum */
+            maximum?: number | null;
+            /** Minimum */
+            minimum?: number | null;
+            /** Name */
+            name: string;
+            /** Title */
+            title: string;
+            /**
+             * Unit
+             * @default
+             */
+            unit: string;
         };
         /**
          * MissionRecord
@@ -1213,6 +1623,164 @@ export interface components {
             /** Time Usec */
             time_usec: number;
         };
+        /**
+         * PadOutline
+         * @description The suggested pad outline in the photo's pixels (corners TL, TR, BR, BL).
+         */
+        PadOutline: {
+            /**
+             * Ellipse
+             * @description the square around a round pad, in view
+             */
+            ellipse: [
+                number,
+                number
+            ][] | null;
+            /**
+             * H Box
+             * @description x, y, w, h of the H-like region found
+             */
+            h_box: number[] | null;
+            /**
+             * Kind
+             * @enum {string}
+             */
+            kind: "quad" | "ellipse" | "h_box";
+            /** Quad */
+            quad: [
+                number,
+                number
+            ][];
+        };
+        /**
+         * ParamInfo
+         * @description One vehicle parameter, with ArduCopter's documentation where known.
+         */
+        ParamInfo: {
+            /** Description */
+            description: string;
+            /** High */
+            high: number | null;
+            /** Integer */
+            integer: boolean;
+            /** Low */
+            low: number | null;
+            /** Name */
+            name: string;
+            /**
+             * Reboot
+             * @description takes effect after a reboot
+             */
+            reboot: boolean;
+            /**
+             * Type
+             * @description MAV_PARAM_TYPE
+             */
+            type: number;
+            /** Units */
+            units: string;
+            /** Value */
+            value: number;
+            /**
+             * Values
+             * @description the documented choices, value -> meaning
+             */
+            values: {
+                [key: string]: string;
+            };
+        };
+        /** ParamListing */
+        ParamListing: {
+            /** Complete */
+            complete: boolean;
+            /**
+             * Count
+             * @description how many parameters the vehicle says it has
+             */
+            count: number;
+            /** Fetched At */
+            fetched_at: number | null;
+            /** Params */
+            params: components["schemas"]["ParamInfo"][];
+            /** Received */
+            received: number;
+        };
+        /** ParamValue */
+        ParamValue: {
+            /**
+             * Value
+             * @description the new value
+             */
+            value: number;
+        };
+        /**
+         * ParamWriteResult
+         * @description A parameter write: what was there, what was asked, what the vehicle said.
+         */
+        ParamWriteResult: {
+            /** Detail */
+            detail: string;
+            /** Name */
+            name: string;
+            /** Ok */
+            ok: boolean;
+            /** Old */
+            old: number | null;
+            /** Value */
+            value: number;
+        };
+        /** PerspectivePhoto */
+        PerspectivePhoto: {
+            /** Height */
+            height: number;
+            /** Id */
+            id: string;
+            /** Name */
+            name: string;
+            outline: components["schemas"]["PadOutline"];
+            /**
+             * Photo
+             * @description URL of the photo
+             */
+            photo: string;
+            /** Width */
+            width: number;
+        };
+        /**
+         * PerspectivePreview
+         * @description The rectified picture and what was measured on it; not active until activated.
+         */
+        PerspectivePreview: {
+            /** Aspect */
+            aspect: number;
+            /** Corners */
+            corners: [
+                number,
+                number
+            ][];
+            /**
+             * Corners Image
+             * @description URL of it with the H's corners drawn
+             */
+            corners_image: string;
+            /** Detail */
+            detail: string;
+            /** Draft */
+            draft: string;
+            /** H Corners */
+            h_corners: number;
+            /** Id */
+            id: string;
+            /**
+             * Image
+             * @description URL of the rectified picture
+             */
+            image: string;
+            /** Pad Size M */
+            pad_size_m: number;
+            /** Symmetric */
+            symmetric: boolean;
+        };
         /** PingMessage */
         PingMessage: {
             /**
@@ -1271,6 +1839,48 @@ export interface components {
             /** Yaw Deg */
             yaw_deg: number;
         };
+        /** PrecLandSetup */
+        PrecLandSetup: {
+            /** Detail */
+            detail: string;
+            /**
+             * Lag S
+             * @description PLND_LAG written (s)
+             */
+            lag_s: number;
+            /**
+             * Latency Ms
+             * @description the measured capture -> result latency
+             */
+            latency_ms: number | null;
+            /** Ok */
+            ok: boolean;
+            reboot: components["schemas"]["CommandResult"] | null;
+            /** Writes */
+            writes: components["schemas"]["ParamWriteResult"][];
+        };
+        /** PreviewRequest */
+        PreviewRequest: {
+            /**
+             * Aspect
+             * @description the pad's width / height
+             * @default 1
+             */
+            aspect: number;
+            /**
+             * Corners
+             * @description the pad's outer corners in the photo's pixels: TL, TR, BR, BL
+             */
+            corners: [
+                number,
+                number
+            ][];
+            /**
+             * Pad Size M
+             * @description the pad's width (m)
+             */
+            pad_size_m: number;
+        };
         /**
          * PublicSettings
          * @description The settings the operator may change, and the fixed facts of this start.
@@ -1278,6 +1888,18 @@ export interface components {
         PublicSettings: {
             /** Camera */
             camera: string;
+            /**
+             * Camera Aspect
+             * @description image width / height
+             * @default 1.3333333333333333
+             */
+            camera_aspect: number;
+            /**
+             * Camera Hfov Deg
+             * @description the camera's horizontal field of view
+             * @default 60
+             */
+            camera_hfov_deg: number;
             /** Jpeg Quality */
             jpeg_quality: number;
             /** Mavlink */
@@ -1286,8 +1908,19 @@ export interface components {
             max_upload_bytes: number;
             /** Max Upload Pixels */
             max_upload_pixels: number;
+            /**
+             * Pad East M
+             * @default 0
+             */
+            pad_east_m: number;
             /** Pad Heading Deg */
             pad_heading_deg: number;
+            /**
+             * Pad North M
+             * @description the pad centre in the local frame (m)
+             * @default 0
+             */
+            pad_north_m: number;
             /** Pad Size M */
             pad_size_m: number;
             /** Record Frames */
@@ -1356,6 +1989,119 @@ export interface components {
              * @description WebSockets refused or closed: Host, Origin, a missing or wrong token, garbage messages
              */
             sockets: number;
+        };
+        /**
+         * ReplayFrame
+         * @description One processed frame of a recorded flight (UNIX time ``t``).
+         */
+        ReplayFrame: {
+            /** Contour Px */
+            contour_px: [
+                number,
+                number
+            ][];
+            /** Corners Px */
+            corners_px: [
+                number,
+                number
+            ][];
+            /** Detected */
+            detected: boolean;
+            /** Latency Ms */
+            latency_ms: number | null;
+            /** Overlay */
+            overlay: {
+                [key: string]: unknown;
+            } | null;
+            /** Position M */
+            position_m: number[] | null;
+            /** Reason */
+            reason: string;
+            /** Seq */
+            seq: number;
+            /** T */
+            t: number;
+            /**
+             * Url
+             * @description its recorded JPEG, if frames were kept
+             */
+            url: string | null;
+        };
+        /** ReplayMission */
+        ReplayMission: {
+            /** Ended */
+            ended: number | null;
+            /** Id */
+            id: number;
+            /** Kind */
+            kind: string;
+            /** Outcome */
+            outcome: string | null;
+            /** Started */
+            started: number;
+            /** States */
+            states: components["schemas"]["ReplayState"][];
+            /** Strategy */
+            strategy: string | null;
+        };
+        /**
+         * ReplaySample
+         * @description The vehicle's state at ``t`` (UNIX time), from the flight's .tlog.
+         */
+        ReplaySample: {
+            /** Alt */
+            alt: number | null;
+            /** Armed */
+            armed: boolean | null;
+            /** Battery V */
+            battery_v: number | null;
+            /** D */
+            d: number | null;
+            /** E */
+            e: number | null;
+            /** Mode */
+            mode: string | null;
+            /** N */
+            n: number | null;
+            /** Pitch */
+            pitch: number | null;
+            /** Roll */
+            roll: number | null;
+            /** T */
+            t: number;
+            /** Yaw */
+            yaw: number | null;
+        };
+        /** ReplayState */
+        ReplayState: {
+            /** Reason */
+            reason: string;
+            /** State */
+            state: string;
+            /** T */
+            t: number;
+        };
+        /** ReplayText */
+        ReplayText: {
+            /** Severity */
+            severity: number;
+            /** T */
+            t: number;
+            /** Text */
+            text: string;
+        };
+        /** SentCommand */
+        SentCommand: {
+            /** Command */
+            command: string;
+            /** Detail */
+            detail: string;
+            /** Ok */
+            ok: boolean;
+            /** Reasons */
+            reasons: string[];
+            /** Result Name */
+            result_name: string;
         };
         /**
          * SettingsUpdate
@@ -1646,6 +2392,62 @@ export interface components {
 }
 export type $defs = Record<string, never>;
 export interface operations {
+    abort_api_abort_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["AbortResult"];
+                };
+            };
+            /** @description The operator token is missing or wrong. */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The vehicle refused GUIDED and BRAKE. */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["AbortResult"];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The link is down: nothing could be sent. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["AbortResult"];
+                };
+            };
+        };
+    };
     list_flights_api_flights_get: {
         parameters: {
             query?: never;
@@ -1855,6 +2657,74 @@ export interface operations {
             };
         };
     };
+    delete_flight_api_flights__flight_id__delete: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description a flight's id */
+                flight_id: number;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["FlightDeleted"];
+                };
+            };
+            /** @description The operator token is missing or wrong. */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description No such thing. */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description Refused: the vehicle said no (its reasons verbatim), or the state forbids it. */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The input is invalid (one sentence says why). */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The link to the vehicle is down, or the station is not running. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+        };
+    };
     flight_frames_api_flights__flight_id__frames_get: {
         parameters: {
             query?: never;
@@ -1934,6 +2804,65 @@ export interface operations {
                 };
                 content: {
                     "image/jpeg": unknown;
+                };
+            };
+            /** @description The operator token is missing or wrong. */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description No such thing. */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The input is invalid (one sentence says why). */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The link to the vehicle is down, or the station is not running. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+        };
+    };
+    flight_replay_api_flights__flight_id__replay_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description a flight's id */
+                flight_id: number;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["FlightReplay"];
                 };
             };
             /** @description The operator token is missing or wrong. */
@@ -2262,6 +3191,53 @@ export interface operations {
             };
         };
     };
+    defaults_api_missions_defaults_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["MissionDefaults"];
+                };
+            };
+            /** @description The operator token is missing or wrong. */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The link to the vehicle is down, or the station is not running. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+        };
+    };
     hover_api_missions_hover_post: {
         parameters: {
             query?: never;
@@ -2441,6 +3417,278 @@ export interface operations {
             };
         };
     };
+    list_params_api_params_get: {
+        parameters: {
+            query?: {
+                /** @description only these, comma-separated (e.g. PLND_ENABLED,PLND_TYPE) */
+                names?: string | null;
+            };
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ParamListing"];
+                };
+            };
+            /** @description The operator token is missing or wrong. */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The link to the vehicle is down, or the station is not running. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+        };
+    };
+    battery_thresholds_api_params_battery_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["BatteryThresholds"];
+                };
+            };
+            /** @description The operator token is missing or wrong. */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The link to the vehicle is down, or the station is not running. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+        };
+    };
+    precland_setup_api_params_precland_setup_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["PrecLandSetup"];
+                };
+            };
+            /** @description The operator token is missing or wrong. */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description Armed (ErrorResponse), or the vehicle refused a write or the reboot. */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["PrecLandSetup"];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The link to the vehicle is down, or the station is not running. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+        };
+    };
+    refresh_params_api_params_refresh_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ParamListing"];
+                };
+            };
+            /** @description The operator token is missing or wrong. */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The link to the vehicle is down, or the station is not running. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+        };
+    };
+    write_param_api_params__name__put: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description an ArduCopter parameter name, e.g. PLND_ENABLED */
+                name: string;
+            };
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["ParamValue"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ParamWriteResult"];
+                };
+            };
+            /** @description The operator token is missing or wrong. */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description No such thing. */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The vehicle kept another value. */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ParamWriteResult"];
+                };
+            };
+            /** @description The input is invalid (one sentence says why). */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The link to the vehicle is down, or the station is not running. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+        };
+    };
     active_reference_api_reference_get: {
         parameters: {
             query?: never;
@@ -2539,6 +3787,318 @@ export interface operations {
             };
             /** @description The upload is not a picture we can read. */
             415: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The input is invalid (one sentence says why). */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The link to the vehicle is down, or the station is not running. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+        };
+    };
+    upload_photo_api_reference_perspective_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "multipart/form-data": components["schemas"]["Body_upload_photo_api_reference_perspective_post"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            201: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["PerspectivePhoto"];
+                };
+            };
+            /** @description The operator token is missing or wrong. */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The upload is larger than the limit (in bytes, or in pixels by its header). */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The upload is not a picture we can read. */
+            415: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The link to the vehicle is down, or the station is not running. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+        };
+    };
+    draft_photo_api_reference_perspective__draft_id__photo_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description a draft photo's id */
+                draft_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description the photo */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "image/png": unknown;
+                };
+            };
+            /** @description The operator token is missing or wrong. */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description No such thing. */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The input is invalid (one sentence says why). */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The link to the vehicle is down, or the station is not running. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+        };
+    };
+    preview_api_reference_perspective__draft_id__preview_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description a draft photo's id */
+                draft_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["PreviewRequest"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["PerspectivePreview"];
+                };
+            };
+            /** @description The operator token is missing or wrong. */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description No such thing. */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The input is invalid (one sentence says why). */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The link to the vehicle is down, or the station is not running. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+        };
+    };
+    preview_image_api_reference_perspective__draft_id__previews__name__get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description a draft photo's id */
+                draft_id: string;
+                name: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description the rectified picture */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "image/png": unknown;
+                };
+            };
+            /** @description The operator token is missing or wrong. */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description No such thing. */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The input is invalid (one sentence says why). */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The link to the vehicle is down, or the station is not running. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+        };
+    };
+    activate_api_reference_perspective__draft_id__previews__preview_id__activate_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description a draft photo's id */
+                draft_id: string;
+                /** @description a preview's id */
+                preview_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            201: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ReferenceSummary"];
+                };
+            };
+            /** @description The operator token is missing or wrong. */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description No such thing. */
+            404: {
                 headers: {
                     [name: string]: unknown;
                 };
@@ -3328,6 +4888,71 @@ export interface operations {
                 };
             };
             /** @description The input is invalid (one sentence says why). */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The link to the vehicle is down, or the station is not running. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["CommandResult"];
+                };
+            };
+            /** @description The vehicle did not acknowledge in time. */
+            504: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["CommandResult"];
+                };
+            };
+        };
+    };
+    reboot_api_vehicle_reboot_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["CommandResult"];
+                };
+            };
+            /** @description The operator token is missing or wrong. */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description Refused: the vehicle said no (its reasons verbatim), or the state forbids it. */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["CommandResult"];
+                };
+            };
+            /** @description Validation Error */
             422: {
                 headers: {
                     [name: string]: unknown;

@@ -2,7 +2,25 @@
 // every failure into an ApiError carrying the server's sentence (and, for a
 // refused vehicle command, the vehicle's reasons verbatim).
 
+import type { components } from "./api-types";
+import { plainValidation, sentence } from "./messages";
 import type { CommandResult, ReferenceSummary, Status, Telemetry } from "./protocol";
+
+type S = components["schemas"];
+export type ParamListing = S["ParamListing"];
+export type ParamInfo = S["ParamInfo"];
+export type ParamWriteResult = S["ParamWriteResult"];
+export type PrecLandSetup = S["PrecLandSetup"];
+export type AbortResult = S["AbortResult"];
+export type FlightSummary = S["FlightSummary"];
+export type FlightReplay = S["FlightReplay"];
+export type MissionDefaults = S["MissionDefaults"];
+export type MissionField = S["MissionField"];
+export type MissionRun = S["MissionRun"];
+export type MissionRunSummary = S["MissionRunSummary"];
+export type PerspectivePhoto = S["PerspectivePhoto"];
+export type PerspectivePreview = S["PerspectivePreview"];
+export type BatteryThresholdsBody = S["BatteryThresholds"];
 
 export type FetchLike = (input: string, init?: RequestInit) => Promise<Response>;
 
@@ -121,6 +139,77 @@ export class ApiClient {
     return this.command(`/api/missions/${action}`, body, true);
   }
 
+  /** POST /api/abort: stop any mission and hold the vehicle; never rejects. */
+  async abort(): Promise<{ ok: boolean; status: number; message: string; sent: AbortResult["sent"] }> {
+    try {
+      const r = await this.request<AbortResult>("POST", "/api/abort");
+      return { ok: r.ok, status: 200, message: sentence(r.detail), sent: r.sent };
+    } catch (error) {
+      if (!(error instanceof ApiError)) throw error;
+      const body = error.body as Partial<AbortResult> | null;
+      return {
+        ok: false,
+        status: error.status,
+        message: describeFailure(error),
+        sent: Array.isArray(body?.sent) ? body.sent : [],
+      };
+    }
+  }
+
+  params(): Promise<ParamListing> {
+    return this.request("GET", "/api/params");
+  }
+
+  refreshParams(): Promise<ParamListing> {
+    return this.request("POST", "/api/params/refresh");
+  }
+
+  writeParam(name: string, value: number): Promise<ParamWriteResult> {
+    return this.request("PUT", `/api/params/${encodeURIComponent(name)}`, { value });
+  }
+
+  batteryThresholds(): Promise<BatteryThresholdsBody> {
+    return this.request("GET", "/api/params/battery");
+  }
+
+  preclandSetup(): Promise<PrecLandSetup> {
+    return this.request("POST", "/api/params/precland-setup");
+  }
+
+  reboot(): Promise<CommandOutcome> {
+    return this.command("/api/vehicle/reboot");
+  }
+
+  missionDefaults(): Promise<MissionDefaults> {
+    return this.request("GET", "/api/missions/defaults");
+  }
+
+  flights(): Promise<FlightSummary[]> {
+    return this.request("GET", "/api/flights");
+  }
+
+  deleteFlight(id: number): Promise<{ id: number; freed_bytes: number }> {
+    return this.request("DELETE", `/api/flights/${id}`);
+  }
+
+  replay(id: number): Promise<FlightReplay> {
+    return this.request("GET", `/api/flights/${id}/replay`);
+  }
+
+  uploadPerspective(file: Blob, filename: string): Promise<PerspectivePhoto> {
+    const form = new FormData();
+    form.append("file", file, filename);
+    return this.request("POST", "/api/reference/perspective", form);
+  }
+
+  previewPerspective(draft: string, corners: [number, number][], padSizeM: number): Promise<PerspectivePreview> {
+    return this.request("POST", `/api/reference/perspective/${draft}/preview`, { corners, pad_size_m: padSizeM });
+  }
+
+  activatePerspective(draft: string, preview: string): Promise<ReferenceSummary> {
+    return this.request("POST", `/api/reference/perspective/${draft}/previews/${preview}/activate`);
+  }
+
   /** A command: never rejects; the outcome says what happened in one sentence. */
   async command(path: string, body?: unknown, isMission = false): Promise<CommandOutcome> {
     try {
@@ -129,7 +218,7 @@ export class ApiClient {
       return {
         ok: result ? result.ok : true,
         status: 200,
-        message: result?.detail || (result ? `${result.command}: ${result.result_name}` : "accepted"),
+        message: sentence(result?.detail || "accepted"),
         reasons: result?.reasons ?? [],
         result,
       };
@@ -144,9 +233,7 @@ export class ApiClient {
       return {
         ok: false,
         status: error.status,
-        message: refused
-          ? `Refused by the vehicle (${result.result_name || "refused"})`
-          : describeFailure(error),
+        message: refused ? sentence(`Refused by the vehicle (${result.result_name || "refused"})`) : describeFailure(error),
         reasons: result?.reasons ?? [],
         result,
       };
@@ -217,18 +304,23 @@ function detailOf(data: unknown, response: Response): string {
   return `HTTP ${response.status} ${response.statusText}`.trim();
 }
 
-function describeFailure(error: ApiError): string {
+/** One sentence for a failed request: what kind of failure, then the server's words. */
+export function describeFailure(error: ApiError): string {
+  const detail = plainValidation(error.detail);
   switch (error.status) {
     case 401:
-      return `Not authorised: ${error.detail}`;
+      return sentence("Not authorised", detail);
     case 409:
-      return `Refused by the vehicle: ${error.detail}`;
+      // "refused by the vehicle (FAILED)" needs no "Refused" before it
+      return sentence(/refus/i.test(detail) ? "" : "Refused", detail);
+    case 422:
+      return sentence("Not accepted", detail);
     case 503:
-      return `Link down: ${error.detail}`;
+      return sentence("Link down", detail);
     case 504:
-      return `No acknowledgement: ${error.detail}`;
+      return sentence("No acknowledgement", detail);
     default:
-      return error.detail;
+      return sentence(detail);
   }
 }
 

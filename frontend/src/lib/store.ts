@@ -11,6 +11,7 @@ import type {
   Status,
   Telemetry,
 } from "./protocol";
+import type { BatteryThresholds } from "./alerts";
 import { RateMeter, Ring } from "./ring";
 import type { ConnectionState } from "./ws-client";
 
@@ -22,7 +23,8 @@ export type Topic =
   | "frame"
   | "image"
   | "event"
-  | "settings";
+  | "settings"
+  | "thresholds";
 
 export interface InvariantSample {
   seq: number;
@@ -53,6 +55,12 @@ export class Store {
   readonly events: Ring<EventMessage>;
   readonly history: Ring<InvariantSample>;
   readonly frameRate = new RateMeter();
+  /** The vehicle's BATT_* thresholds (GET /api/params/battery), for the alerts. */
+  thresholds: BatteryThresholds | null = null;
+  /** Until when (Date.now() ms) a link loss is the reboot the operator asked for. */
+  rebootingUntil = 0;
+  /** performance.now() when the first state from the server was applied (first paint). */
+  firstStateAt: number | null = null;
   /** The last heartbeat age the server reported, and when it changed here (ms). */
   private heartbeatAge: number | null = null;
   private heartbeatAgeAt = 0;
@@ -80,6 +88,11 @@ export class Store {
     return () => {
       for (const topic of list) this.listeners.get(topic)?.delete(cb);
     };
+  }
+
+  setThresholds(thresholds: BatteryThresholds | null): void {
+    this.thresholds = thresholds;
+    this.emit("thresholds");
   }
 
   setConnection(state: ConnectionState): void {
@@ -137,14 +150,22 @@ export class Store {
 
   apply(msg: ServerMessage): void {
     switch (msg.type) {
-      case "hello":
-        // a reconnecting page gets the whole current state at once
+      case "hello": {
+        // a reconnecting page gets the whole current state at once, and what happened
+        // before it (the events survive a reload: they are the server's)
         this.setStatus(msg.status);
         this.setTelemetry(msg.telemetry);
         this.setReference(msg.reference ?? null);
         this.settings = msg.settings ?? {};
         this.emit("settings");
+        const seen = new Set(this.events.toArray().map((e) => `${e.t}|${e.kind}|${e.text}`));
+        for (const e of msg.events ?? []) {
+          if (!seen.has(`${e.t}|${e.kind}|${e.text}`)) this.events.push(e);
+        }
+        this.emit("event");
+        if (this.firstStateAt === null) this.firstStateAt = typeof performance !== "undefined" ? performance.now() : 0;
         break;
+      }
       case "telemetry": {
         const { type: _type, ...rest } = msg;
         this.setTelemetry(rest);

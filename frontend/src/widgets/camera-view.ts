@@ -80,6 +80,7 @@ export function mountCameraView(root: HTMLElement, ctx: Ctx): void {
   let pendingMask: BinaryFrame | null = null;
   let lastScreenLatency: number | null = null;
   let lastDrawn = 0;
+  let drawnTotal = 0; // new frames drawn since the page opened (the benchmark reads it)
 
   store.subscribe("frame", () => {
     const f = store.frame;
@@ -157,6 +158,9 @@ export function mountCameraView(root: HTMLElement, ctx: Ctx): void {
     lastDrawn = now;
     if (isNewFrame) {
       shown.tick(now);
+      drawnTotal += 1;
+      (window as unknown as { visland?: { cameraDrawn?: number } }).visland ??= {};
+      (window as unknown as { visland: { cameraDrawn?: number } }).visland.cameraDrawn = drawnTotal;
       if (frame && frame.seq === current.seq && current.receivedAt !== null) {
         // capture->result on the server, then result->screen measured here
         lastScreenLatency = frame.latency_ms + (now - current.receivedAt);

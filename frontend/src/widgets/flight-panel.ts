@@ -1,7 +1,9 @@
 // Flight panel: the link state (loud when lost), mode, armed, altitude, attitude,
 // battery, GPS/EKF and the vehicle's own messages (STATUSTEXT).
 
+import { batteryLevel } from "../lib/alerts";
 import { fmt, fmtAge, fmtClock } from "../lib/format";
+import { describeEkf, readiness } from "../lib/readiness";
 import { gpsFixName, readTelemetry, severityName } from "../lib/telemetry";
 import { type Ctx, fields, fitCanvas, h, panel, rafThrottle, setText } from "./dom";
 import { drawAttitude } from "./attitude";
@@ -33,7 +35,7 @@ export function mountFlightPanel(root: HTMLElement, ctx: Ctx): void {
     ["battery", "Battery"],
     ["gps", "GPS"],
     ["ekf", "EKF"],
-    ["prearm", "Pre-arm"],
+    ["prearm", "Arming"],
     ["rangefinder", "Rangefinder"],
     ["linkq", "Link"],
   ]);
@@ -70,13 +72,18 @@ export function mountFlightPanel(root: HTMLElement, ctx: Ctx): void {
       f.battery,
       v.batteryV === null ? "—" : `${fmt(v.batteryV, 2, "V")} · ${fmt(v.batteryA, 1, "A")} · ${fmt(v.batteryPct, 0, "%")}`,
     );
-    f.battery.dataset.level = v.batteryPct === null ? "" : v.batteryPct < 20 ? "bad" : v.batteryPct < 35 ? "warn" : "ok";
+    const bl = batteryLevel({ batteryV: v.batteryV, batteryPct: v.batteryPct, mahUsed: null, thresholds: store.thresholds });
+    f.battery.dataset.level = bl.level === "critical" ? "bad" : bl.level === "low" ? "warn" : bl.level === "ok" ? "ok" : "";
+    f.battery.title = bl.why;
     setText(f.gps, v.gpsFix === null ? "—" : `${gpsFixName(v.gpsFix)} · ${v.gpsSats ?? "—"} sats · hdop ${fmt(v.gpsHdop, 1)}`);
-    f.gps.dataset.level = v.gpsFix === null ? "" : v.gpsFix >= 3 ? "ok" : "bad";
-    setText(f.ekf, v.ekfHealthy === null ? "—" : `${v.ekfHealthy ? "healthy" : "NOT healthy"} · flags 0x${(v.ekfFlags ?? 0).toString(16)}`);
-    f.ekf.dataset.level = v.ekfHealthy === null ? "" : v.ekfHealthy ? "ok" : "bad";
-    setText(f.prearm, v.prearmOk === null ? "—" : v.prearmOk ? "checks pass" : "checks failing");
-    f.prearm.dataset.level = v.prearmOk === null ? "" : v.prearmOk ? "ok" : "warn";
+    f.gps.dataset.level = v.gpsFix === null ? "" : v.gpsFix >= 3 ? "ok" : "warn";
+    const posOk = store.telemetry?.ekf?.pos_horiz_ok ?? null;
+    const ekf = describeEkf(v.ekfHealthy, v.ekfFlags, posOk);
+    setText(f.ekf, ekf.text);
+    f.ekf.dataset.level = ekf.level;
+    const r = readiness({ mode: v.mode, armed: v.armed, prearmOk: v.prearmOk, ekfPosOk: posOk, statustexts: v.statustexts, now: Date.now() / 1000 });
+    setText(f.prearm, r.text);
+    f.prearm.dataset.level = r.ready === null ? "" : r.ready ? "ok" : "warn";
     setText(f.rangefinder, fmt(v.rangefinderM, 2, "m"));
     setText(f.linkq, `${fmt(v.msgsPerS, 0, "msg/s")} · ${v.crcErrors ?? 0} bad`);
     setText(attText, `R ${fmt(v.rollDeg, 1)}°  P ${fmt(v.pitchDeg, 1)}°  Y ${fmt(v.yawDeg, 1)}°`);

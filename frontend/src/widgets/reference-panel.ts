@@ -2,10 +2,29 @@
 // extracted from it (threshold mask, numbered corners), its corners in metres and
 // its invariants; pick an earlier reference again.
 
-import { ApiError } from "../lib/api";
+import { ApiError, describeFailure } from "../lib/api";
 import { fmt, fmtDate, fmtSci } from "../lib/format";
 import type { ReferenceSummary } from "../lib/protocol";
+import { confirmDialog } from "./confirm-dialog";
 import { type Ctx, h, panel, setText } from "./dom";
+import { mountPerspectiveEditor } from "./perspective-editor";
+
+/** While a mission runs, switching the reference asks first and says what happens. */
+export async function confirmReferenceSwitch(ctx: Ctx, what: string): Promise<boolean> {
+  const m = ctx.store.status?.mission;
+  if (!m || m.outcome) return true;
+  return confirmDialog({
+    title: `${what} during the ${m.kind} mission?`,
+    warning: `A ${m.kind} mission is running (${m.state}).`,
+    lines: [
+      "From the next frame the vision looks for the new pad, not the one under the vehicle.",
+      "If the vehicle is over the old pad, the mission loses it: it holds, climbs to search, and aborts if it cannot find the new one.",
+      "ABORT (top right) stops the mission and holds the vehicle.",
+    ],
+    confirmLabel: `${what} anyway`,
+    danger: true,
+  });
+}
 
 export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
   const { api, store } = ctx;
@@ -54,10 +73,12 @@ export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
   const invTable = h("table", { class: "data-table compact" }, invBody);
   const list = h("ul", { class: "ref-list", "data-testid": "reference-list" });
 
+  const perspective = h("div", { class: "perspective" });
   root.append(
     panel(
       "Reference pad",
       "reference",
+      h("h3", { class: "sub-title" }, "From a picture taken straight from above"),
       form,
       uploadState,
       h(
@@ -66,10 +87,13 @@ export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
         h("div", { class: "ref-main" }, title, meta, verifierLine, images),
         h("div", { class: "ref-tables" }, cornersTable, invTable),
       ),
+      perspective,
       h("h3", { class: "sub-title" }, "Earlier references"),
       list,
     ),
   );
+  mountPerspectiveEditor(perspective, ctx, () => confirmReferenceSwitch(ctx, "Activate the new reference"));
+  document.addEventListener("visland:references-changed", () => void refreshList());
 
   let shownId: string | null = null;
   function show(ref: ReferenceSummary | null): void {
@@ -138,6 +162,7 @@ export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
             const activate = h("button", { class: "btn btn-small btn-secondary btn-fixed", type: "button", "data-testid": `activate-${r.id}` }, "Activate");
             activate.disabled = r.active;
             activate.addEventListener("click", async () => {
+              if (!(await confirmReferenceSwitch(ctx, `Switch to '${r.name}'`))) return;
               activate.disabled = true;
               try {
                 const s = await api.activateReference(r.id);
@@ -145,7 +170,7 @@ export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
                 setText(uploadState, `Reference '${s.name}' is active.`);
                 uploadState.dataset.ok = "true";
               } catch (error) {
-                setText(uploadState, `Could not activate: ${(error as Error).message}`);
+                setText(uploadState, error instanceof ApiError ? `Could not activate: ${describeFailure(error)}` : String(error));
                 uploadState.dataset.ok = "false";
                 if (error instanceof ApiError && error.status === 401) document.dispatchEvent(new CustomEvent("visland:need-token"));
               }
@@ -173,6 +198,7 @@ export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
       uploadState.dataset.ok = "false";
       return;
     }
+    if (!(await confirmReferenceSwitch(ctx, "Upload a new reference"))) return;
     upload.disabled = true;
     setText(uploadState, `Uploading ${f.name}…`);
     delete uploadState.dataset.ok;
@@ -184,7 +210,8 @@ export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
       void refreshList();
     } catch (error) {
       const e = error as ApiError;
-      setText(uploadState, `Upload refused${e.status ? ` (${e.status})` : ""}: ${e.message}. The previous reference stays active.`);
+      const why = e instanceof ApiError && e.status ? describeFailure(e) : `${e.message.replace(/[.\s]+$/, "")}.`;
+      setText(uploadState, `Upload refused${e.status ? ` (${e.status})` : ""}: ${why.replace(/[.\s]+$/, "")}; the previous reference stays active.`);
       uploadState.dataset.ok = "false";
       if (e.status === 401) document.dispatchEvent(new CustomEvent("visland:need-token"));
     } finally {

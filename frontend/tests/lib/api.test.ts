@@ -70,7 +70,7 @@ describe("ApiClient", () => {
     handler = (_req, _b, res) =>
       json(res, 200, { ok: true, command: "arm", result: 0, result_name: "ACCEPTED", reasons: [], detail: "" });
     const out = await new ApiClient({ baseUrl: base, token: () => "t0ken-123" }).vehicle("arm");
-    expect(out).toMatchObject({ ok: true, status: 200, message: "arm: ACCEPTED", reasons: [] });
+    expect(out).toMatchObject({ ok: true, status: 200, message: "Accepted.", reasons: [] });
     expect(seen[0]).toMatchObject({ method: "POST", url: "/api/vehicle/arm" });
   });
 
@@ -89,14 +89,14 @@ describe("ApiClient", () => {
     expect(out.ok).toBe(false);
     expect(out.status).toBe(409);
     expect(out.reasons).toEqual(reasons);
-    expect(out.message).toBe("Refused by the vehicle (FAILED)");
+    expect(out.message).toBe("Refused by the vehicle (FAILED).");
   });
 
   it("a refusal without reasons gives the server's sentence", async () => {
     handler = (_req, _b, res) =>
       json(res, 409, { ok: false, command: "takeoff", result: 4, result_name: "FAILED", reasons: [], detail: "Take-off refused." });
     const out = await new ApiClient({ baseUrl: base }).takeoff(2);
-    expect(out).toMatchObject({ ok: false, status: 409, reasons: [], message: "Refused by the vehicle: Take-off refused." });
+    expect(out).toMatchObject({ ok: false, status: 409, reasons: [], message: "Take-off refused." });
   });
 
   it("posts JSON bodies for mode and take-off", async () => {
@@ -128,7 +128,7 @@ describe("ApiClient", () => {
     ] as const) {
       handler = (_req, _b, res) => json(res, status, { detail: "Because of reasons." });
       const out = await api.vehicle("land");
-      expect(out).toMatchObject({ ok: false, status, message: `${prefix}: Because of reasons.`, reasons: [] });
+      expect(out).toMatchObject({ ok: false, status, message: `${prefix}: because of reasons.`, reasons: [] });
     }
   });
 
@@ -145,14 +145,15 @@ describe("ApiClient", () => {
     handler = (_req, _b, res) => json(res, 404, { detail: "Not Found" });
     // a vehicle 404 is not a missing mission
     const out = await api.vehicle("rtl");
-    expect(out.message).toBe("Not Found");
+    expect(out.message).toBe("Not Found.");
   });
 
   it("reads FastAPI validation error lists into one sentence", async () => {
     handler = (_req, _b, res) =>
       json(res, 422, { detail: [{ loc: ["body", "altitude_m"], msg: "Input should be a valid number" }] });
     const out = await new ApiClient({ baseUrl: base }).takeoff(3);
-    expect(out.message).toBe("altitude_m: Input should be a valid number");
+    // one plain sentence: no field names with underscores, no pydantic wording
+    expect(out.message).toBe("Not accepted: altitude (m): must be a number.");
   });
 
   it("rejects with ApiError for a failed GET, keeping the body", async () => {

@@ -1,0 +1,297 @@
+"""The vehicle's parameters: read them all, write one (checked, confirmed by the vehicle's
+echo, logged), reboot the autopilot, and set up precision landing in one step.
+
+Every write is an event (``param``), whether the vehicle took it or not; so is a reboot.
+Calls block the calling thread until the vehicle answers or a timeout (the routes run
+them on worker threads).
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from backend.link import CommandResult, LinkEvent, LinkState, VehicleLink
+from backend.services.events import EventLog
+from backend.services.param_meta import META, check_value
+
+#: How long a full parameter download may take (a telemetry radio: ~800 params at 57600 baud).
+LIST_TIMEOUT_S = 20.0
+#: No new parameter for this long: ask for the list again (at most LIST_ASKS times).
+LIST_STALL_S = 2.0
+LIST_ASKS = 4
+#: PLND_LAG's documented range (s).
+LAG_RANGE_S = (0.02, 0.25)
+#: Result -> LANDING_TARGET on the link, added to the measured capture -> result (ms):
+#: the mission thread is woken by the result and sends at once (bench.station_load
+#: measures it under 10 ms at p95).
+SEND_MS = 10.0
+BATTERY_PARAMS = ("BATT_LOW_VOLT", "BATT_CRT_VOLT", "BATT_LOW_MAH", "BATT_CRT_MAH", "BATT_CAPACITY")
+#: Read whenever the link comes up: the alerts' thresholds and the landing panel's PLND state.
+WATCHED = (*BATTERY_PARAMS, "PLND_ENABLED", "PLND_TYPE", "PLND_LAG")
+
+
+class UnknownParam(LookupError):
+    """The vehicle has no parameter of that name."""
+
+
+class BadValue(ValueError):
+    """The value is outside the parameter's range or type (one sentence)."""
+
+
+class VehicleArmed(RuntimeError):
+    """Refused because the vehicle is armed (a reboot; a set-up that ends in one)."""
+
+
+@dataclass(frozen=True)
+class Write:
+    """One parameter write: what was asked, what the vehicle said."""
+
+    name: str
+    old: float | None
+    value: float
+    result: CommandResult
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "old": self.old,
+            "value": self.value,
+            "ok": self.result.ok,
+            "detail": self.result.detail,
+        }
+
+
+def lag_from_latency(latency_ms: float | None) -> float:
+    """PLND_LAG (s) for a measured capture -> result latency, within its documented range.
+
+    >>> lag_from_latency(72.0)
+    0.082
+    >>> lag_from_latency(None)
+    0.1
+    >>> lag_from_latency(900.0)
+    0.25
+    """
+    if latency_ms is None or not math.isfinite(latency_ms) or latency_ms < 0:
+        return 0.1  # nothing measured yet: a camera at ~10 fps with its processing
+    lag = (latency_ms + SEND_MS) / 1000.0
+    return round(min(LAG_RANGE_S[1], max(LAG_RANGE_S[0], lag)), 3)
+
+
+class ParamService:
+    """Parameters of the vehicle on ``link``; ``latency_ms()`` the vision's measured
+    capture -> result latency (for PLND_LAG)."""
+
+    def __init__(
+        self,
+        link: VehicleLink,
+        events: EventLog,
+        *,
+        latency_ms: Callable[[], float | None],
+        camera_offset_m: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    ) -> None:
+        self._link = link
+        self._events = events
+        self._latency_ms = latency_ms
+        self._camera_offset = camera_offset_m
+        self._lock = threading.Lock()  # one write or download at a time
+        self.fetched_at: float | None = None
+
+    # --- reading ---------------------------------------------------------------------------
+    def on_link_event(self, event: LinkEvent) -> None:
+        """When the link comes up (a start, a reboot), read :data:`WATCHED` in the
+        background: the battery alerts and the landing panel need them at once."""
+        if event.kind == "link_up":
+            threading.Thread(target=self._read_watched, name="params-watched", daemon=True).start()
+
+    def _read_watched(self) -> None:
+        for name in WATCHED:
+            if self._link.state != LinkState.UP:
+                return
+            self._link.get_param(name, timeout=2.0)
+
+    def listing(self, names: set[str] | None = None) -> dict[str, Any]:
+        """Every parameter heard so far (or those of ``names``) with its documentation,
+        and whether that is all of them."""
+        table, count = self._link.param_table()
+        params = []
+        for name in sorted(table):
+            if names is not None and name not in names:
+                continue
+            value, ptype = table[name]
+            params.append(_describe(name, value, ptype))
+        return {
+            "count": count,
+            "received": len(table),
+            "complete": count > 0 and len(table) >= count,
+            "fetched_at": self.fetched_at,
+            "params": params,
+        }
+
+    def refresh(self, timeout_s: float = LIST_TIMEOUT_S) -> dict[str, Any]:
+        """Download every parameter (PARAM_REQUEST_LIST); returns :meth:`listing`.
+
+        Waits until the vehicle sent as many as it says it has, or ``timeout_s``; the
+        listing says how many came.
+        """
+        if self._link.state != LinkState.UP:
+            raise ConnectionError("the link to the vehicle is down; no parameters were read")
+        with self._lock:
+            deadline = time.monotonic() + timeout_s
+            asked = 0
+            heard, heard_at = -1, 0.0
+            while time.monotonic() < deadline:
+                table, count = self._link.param_table()
+                if count > 0 and len(table) >= count:
+                    break
+                now = time.monotonic()
+                if self._link.state != LinkState.UP:
+                    # Rebooting, or a radio drop-out: ask again once it is back.
+                    asked = min(asked, LIST_ASKS - 1)
+                    heard_at = -math.inf
+                    time.sleep(0.1)
+                    continue
+                if len(table) != heard:
+                    heard, heard_at = len(table), now
+                # Nothing new for a while (a lost request, a vehicle still booting): ask
+                # again, as ground stations do, a few times.
+                if (asked == 0 or now - heard_at > LIST_STALL_S) and asked < LIST_ASKS:
+                    sent = self._link.request_param_list()
+                    if not sent.ok:
+                        raise ConnectionError(sent.detail)
+                    asked += 1
+                    heard_at = now
+                time.sleep(0.05)
+            self.fetched_at = time.time()
+        return self.listing()
+
+    def value(self, name: str) -> float | None:
+        table, _ = self._link.param_table()
+        got = table.get(name)
+        return None if got is None else got[0]
+
+    def battery_thresholds(self) -> dict[str, float | None]:
+        """BATT_* values the alerts use (None where the vehicle has no such parameter)."""
+        table, _ = self._link.param_table()
+        return {name: (table[name][0] if name in table else None) for name in BATTERY_PARAMS}
+
+    # --- writing ---------------------------------------------------------------------------
+    def write(self, name: str, value: float, *, why: str = "") -> Write:
+        """Check ``value`` and write it; raises :class:`UnknownParam`, :class:`BadValue`."""
+        table, _ = self._link.param_table()
+        if name not in table:
+            # Perhaps not downloaded yet: ask for this one before refusing.
+            if self._link.get_param(name, timeout=2.0) is None:
+                raise UnknownParam(f"The vehicle has no parameter {name}.")
+            table, _ = self._link.param_table()
+        old, ptype = table[name]
+        problem = check_value(name, value, ptype)
+        if problem is not None:
+            raise BadValue(problem)
+        with self._lock:
+            result = self._link.set_param(name, value)
+        write = Write(name, old, float(value), result)
+        self._log(write, why)
+        return write
+
+    def reboot(self, *, why: str = "") -> CommandResult:
+        """Reboot the autopilot (refused while armed, as ArduCopter itself refuses)."""
+        if self._link.telemetry.armed:
+            raise VehicleArmed("The vehicle is armed: land and disarm before a reboot.")
+        result = self._link.reboot()
+        text = "autopilot reboot " + ("sent" if result.ok else f"refused: {result.detail}")
+        self._events.emit(
+            "param", text + (f" ({why})" if why else ""), {"reboot": True, "ok": result.ok}
+        )
+        return result
+
+    def setup_precland(self) -> dict[str, Any]:
+        """Write what ArduCopter's precision landing needs to take this station's targets,
+        PLND_LAG from the measured latency, then reboot (PLND_TYPE is read at boot).
+
+        Stops at the first write the vehicle refuses; raises :class:`VehicleArmed`
+        while armed (nothing written).
+        """
+        if self._link.telemetry.armed:
+            raise VehicleArmed(
+                "The vehicle is armed: land and disarm before setting up precision landing "
+                "(it ends in a reboot)."
+            )
+        latency = self._latency_ms()
+        lag = lag_from_latency(latency)
+        why = "precision landing set-up"
+        wanted: list[tuple[str, float]] = [
+            ("PLND_ENABLED", 1.0),
+            ("PLND_TYPE", 1.0),
+            ("PLND_EST_TYPE", 1.0),
+            ("PLND_LAG", lag),
+            ("PLND_ORIENT", 25.0),
+        ]
+        for axis, offset in zip("XYZ", self._camera_offset, strict=True):
+            wanted.append((f"PLND_CAM_POS_{axis}", offset))
+        writes: list[Write] = []
+        for name, value in wanted:
+            try:
+                write = self.write(name, value, why=why)
+            except UnknownParam:
+                continue  # older firmware without it (e.g. PLND_ORIENT before 4.2)
+            writes.append(write)
+            if not write.result.ok:
+                return {
+                    "ok": False,
+                    "lag_s": lag,
+                    "latency_ms": latency,
+                    "writes": [w.to_dict() for w in writes],
+                    "reboot": None,
+                    "detail": f"The vehicle refused {name}: {write.result.detail}; "
+                    "nothing more was written and no reboot was sent.",
+                }
+        reboot = self.reboot(why=why)
+        measured = "none measured yet" if latency is None else f"measured {latency:.0f} ms"
+        detail = (
+            f"Precision landing set up: {len(writes)} parameters written, PLND_LAG {lag:g} s "
+            f"({measured} capture to result, plus {SEND_MS:g} ms to send)"
+        )
+        detail += (
+            "; the autopilot is rebooting."
+            if reboot.ok
+            else f"; the reboot was refused ({reboot.detail}), reboot it before landing."
+        )
+        return {
+            "ok": reboot.ok,
+            "lag_s": lag,
+            "latency_ms": latency,
+            "writes": [w.to_dict() for w in writes],
+            "reboot": reboot.to_dict(),
+            "detail": detail,
+        }
+
+    def _log(self, write: Write, why: str) -> None:
+        old = "unknown" if write.old is None else f"{write.old:g}"
+        if write.result.ok:
+            text = f"parameter {write.name} set from {old} to {write.value:g}"
+        else:
+            text = f"parameter {write.name} not set to {write.value:g}: {write.result.detail}"
+        if why:
+            text += f" ({why})"
+        self._events.emit("param", text, {**write.to_dict(), "why": why})
+
+
+def _describe(name: str, value: float, ptype: int) -> dict[str, Any]:
+    meta = META.get(name)
+    return {
+        "name": name,
+        "value": value,
+        "type": ptype,
+        "integer": ptype != 9,  # MAV_PARAM_TYPE_REAL32
+        "description": meta.description if meta else "",
+        "units": meta.units if meta else "",
+        "low": meta.low if meta else None,
+        "high": meta.high if meta else None,
+        "values": {str(k): v for k, v in meta.values.items()} if meta else {},
+        "reboot": meta.reboot if meta else False,
+    }
