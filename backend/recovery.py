@@ -45,10 +45,11 @@ def _close_flight(storage: Storage, row: dict[str, Any], tlog_dir: Path | None, 
     folder = Path(row["dir"]) if row["dir"] else None
     frames, ended = 0, started
     if folder is not None and folder.is_dir():
+        # when the flight last wrote, read before the clean-up below touches its files
+        ended = max([started, *(_mtime(p) for p in folder.rglob("*") if p.is_file())])
         for part in folder.glob("frames/*.part"):
             part.unlink(missing_ok=True)  # a frame the crash cut short
         frames = _complete_lines(folder / "results.jsonl")
-        ended = max([started, *(_mtime(p) for p in folder.rglob("*") if p.is_file())])
         try:
             write_flight_tlog(folder, tlog_dir, started, ended)
         except OSError:

@@ -116,6 +116,8 @@ def compare(
     ncc = _ncc(ch_frame[near], ch_ref[near])
     # The reference's own levels say which pixels are H and which are board
     # (the quarter nearest each end, leaving out the blurred edges between).
+    if not around.any():  # a degenerate outline (a fuzzed or odd reference)
+        return Comparison(ncc, math.nan, math.nan, math.nan)
     low, high = np.percentile(ch_ref[around], [5, 95])
     spread = high - low
     board = around & (ch_ref <= low + 0.25 * spread)

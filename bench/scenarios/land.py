@@ -271,6 +271,9 @@ def fly_to_start(driver: Any, spec: RunSpec, *, precland: bool | None = None) ->
         if driver.deterministic:  # PLND_TYPE is read at boot
             if not link.reboot().ok:
                 raise RuntimeError("set-up: reboot refused")
+            # the stand-in is silent while it reboots; telemetry from before is stale
+            while driver.server.rebooting:
+                driver.advance(0.1)
             driver.advance(0.5)
     _wait(driver, 0.1, lambda t: t.position_ned is not None, 30, "position estimate")
     if not link.set_mode("GUIDED").ok:

@@ -75,11 +75,11 @@ class LockstepLink:
     def sync(self) -> bool:
         """Barrier: both sides have handled everything the other sent so far.
 
-        Returns False when the link is down (nothing to wait for: a dropped link is a
-        scenario, not an error); raises :class:`LockstepError` when an up link is mute.
+        Returns False when the link is down or the vehicle is rebooting (nothing to wait
+        for: a dropped link is a scenario, not an error); raises :class:`LockstepError` when an up link is mute.
         """
-        if self.link.telemetry.state != LinkState.UP:
-            return False
+        if self.link.telemetry.state != LinkState.UP or self.server.rebooting:
+            return False  # nothing to wait for (a rebooting vehicle answers nothing)
         if self.pump(self.link.get_param, SYNC_PARAM, timeout=CALL_TIMEOUT_S / 2) is None:
             if self.link.telemetry.state != LinkState.UP:
                 return False

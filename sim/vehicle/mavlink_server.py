@@ -177,6 +177,11 @@ class VehicleServer:
             return self.sim.truth
 
     # ------------------------------------------------------------------ clock
+    @property
+    def rebooting(self) -> bool:
+        """Between a reboot's ACK and the boot: the vehicle hears and says nothing."""
+        return self.sim.time_s < self._silent_until
+
     def advance(self, dt: float) -> None:
         """Lockstep: handle what has arrived, step ``dt`` sim seconds, send what is due."""
         if not self.lockstep:

@@ -230,7 +230,7 @@ def test_one_land_button_and_every_mission_parameter_with_its_default(page, stat
     # a bad value is refused in the page, in a sentence
     page.get_by_test_id("hover-altitude_m").fill("0")
     page.get_by_test_id("hover").click()
-    expect(page.get_by_test_id("mission-outcome")).to_have_text("Altitude must be more than 0 m.")
+    expect(page.get_by_test_id("mission-outcome")).to_have_text("Altitude must be at least 1 m.")
     expect(page.get_by_test_id("confirm-dialog")).to_have_count(0)
 
 

@@ -160,9 +160,10 @@ def test_the_token_is_in_no_url_response_or_log_line(browser, station: Served) -
         expect(page.get_by_test_id("link-state")).to_have_text("LINK UP", timeout=30_000)
         # a command goes out with the token (accepted or refused: either is an answer)
         page.get_by_test_id("arm").click()
-        page.get_by_test_id("arm").click()
+        page.get_by_test_id("confirm-yes").click()
         expect(page.get_by_test_id("command-outcome")).not_to_contain_text("sending")
         # the 3D view loads through the station and gets its scene
+        page.get_by_test_id("viser-embed").click()  # embedded on demand
         frame = page.get_by_test_id("viser-frame")
         frame.scroll_into_view_if_needed()
         deadline = time.monotonic() + 30

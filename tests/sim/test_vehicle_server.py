@@ -542,6 +542,8 @@ def _enable_precland(rig: Rig) -> None:
     ack = rig.command(mavlink.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, 1)
     assert ack.result == mavlink.MAV_RESULT_ACCEPTED
     assert rig.sim.precland.enabled
+    # silent while it reboots, like ArduCopter
+    assert rig.run(10.0, lambda: not rig.server.rebooting)
 
 
 def test_precision_landing_touches_down_on_an_offset_target() -> None:
