@@ -76,7 +76,8 @@ class LockstepLink:
         """Barrier: both sides have handled everything the other sent so far.
 
         Returns False when the link is down or the vehicle is rebooting (nothing to wait
-        for: a dropped link is a scenario, not an error); raises :class:`LockstepError` when an up link is mute.
+        for: a dropped link is a scenario, not an error); raises :class:`LockstepError`
+        when an up link is mute.
         """
         if self.link.telemetry.state != LinkState.UP or self.server.rebooting:
             return False  # nothing to wait for (a rebooting vehicle answers nothing)
