@@ -31,6 +31,10 @@ from pipeline.view import View
 
 MEASURE_SPAN_PX = 320.0  # the pad is measured at most this many pixels across
 MAX_TILT_OFF_DEG = 3.0  # a refined pose may lean this far from the attitude's level
+# With the attitude known, a pad whose pixels insist on leaning further than this from
+# level is not the pad lying flat (an H of other proportions seen at a slant, or a wrong
+# pose): the hint's error and a sloping pad stay well under it.
+MAX_LEAN_DEG = 12.0
 AMBIGUOUS_FIT = 0.8  # two poses whose RMS errors are within this ratio are a tie
 WIDE_SEARCH_PX = 6.0  # how far the whole pad's edges are first looked for
 SELF_SUFFICIENT_PX = 100.0  # an H this large pins the pose by itself
@@ -228,6 +232,8 @@ def _fit_pose(
             better = edge_support(img, reference.edge_model, cam, refined.rvec, refined.tvec)
             if better >= support:  # a drift along a flat valley finds fewer edges
                 fit, support = refined, better
+    if gravity is not None and tilt_from_level_deg(fit.rvec, gravity) > MAX_LEAN_DEG:
+        return None
     return fit, support, ambiguous
 
 

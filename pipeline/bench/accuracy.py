@@ -70,7 +70,8 @@ def run(
             res = process_frame(frame, reference, camera, method=method, gravity_hint=g)
             tally.time(time.perf_counter() - t0, res.timings_ms)
             tally.score(res.detected and res.pose is not None, res.pose, view, d.symmetric)
-            fp = process_frame(empty, reference, camera, method=method)
+            # the same attitude: a vehicle knows it whether or not the pad is in view
+            fp = process_frame(empty, reference, camera, method=method, gravity_hint=g)
             tally.false_positive(fp.detected)
         t0 = time.perf_counter()
         pose = detector.pose(marked, camera)
