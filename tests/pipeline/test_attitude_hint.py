@@ -1,0 +1,92 @@
+"""The attitude prior: the camera's tilt from the autopilot picks the pad's pose, and
+without it an ambiguous pose is flagged, never silently wrong."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from pipeline import Camera, Reference, process_frame
+from pipeline.pose import TURN, pad_normal_in_camera, pose_to_vectors
+from pipeline.render import camera_rotation, make_pad_image, make_scene, render
+from pipeline.result import Pose
+
+CAM = Camera.from_fov(640, 480, 60.0)
+
+
+@pytest.fixture(scope="module")
+def reference() -> Reference:
+    return Reference.from_image(make_pad_image(1100), 0.55)
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return make_scene(make_pad_image(1100), 0.55, rng=np.random.default_rng(8))
+
+
+def gravity_of(position: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """Down in the camera frame for a level pad seen from this pose (the hint a
+    vehicle's attitude and camera mount give)."""
+    rvec, _ = pose_to_vectors(Pose(position, R, 0.0, True))
+    return -pad_normal_in_camera(rvec)
+
+
+def rotation_error_deg(pose: Pose, R: np.ndarray) -> float:
+    """Rotation error, modulo the pad's half turn (the default pad is symmetric)."""
+    best = math.inf
+    for r in (R, TURN @ R):
+        c = (np.trace(pose.R_pad_cam.T @ r) - 1) / 2
+        best = min(best, math.degrees(math.acos(np.clip(c, -1, 1))))
+    return best
+
+
+def far_views(n: int):
+    """Small, nearly head-on views at 4.5-6 m: where the two planar poses tie."""
+    rng = np.random.default_rng(21)
+    for _ in range(n):
+        alt = rng.uniform(4.5, 6.0)
+        R = camera_rotation(
+            rng.uniform(0, 360), tilt_deg=rng.uniform(0, 6), tilt_dir_deg=rng.uniform(0, 360)
+        )
+        position = np.array([rng.uniform(-0.5, 0.5), rng.uniform(-0.4, 0.4), alt])
+        yield position, R, int(rng.integers(1 << 31))
+
+
+def test_far_poses_are_right_with_the_hint_and_flagged_without(reference, scene):
+    right_with = seen = flagged = 0
+    for position, R, noise in far_views(20):
+        frame = render(scene, CAM, position, R, snr_db=15.0, rng=np.random.default_rng(noise))
+        hinted = process_frame(frame, reference, CAM, gravity_hint=gravity_of(position, R))
+        assert hinted.detected and hinted.pose is not None
+        assert not hinted.pose.ambiguous  # the attitude settles it
+        right_with += rotation_error_deg(hinted.pose, R) < 3.0
+        blind = process_frame(frame, reference, CAM)
+        if blind.detected and blind.pose is not None:
+            seen += 1
+            # no silent wrong pose: a pose more than 3 degrees off says it may be
+            if rotation_error_deg(blind.pose, R) > 3.0:
+                assert blind.pose.ambiguous
+                flagged += 1
+    assert right_with == 20
+    assert seen >= 16
+
+
+def test_a_pad_leaning_far_from_the_attitudes_level_is_refused(reference, scene):
+    R = camera_rotation(30.0, tilt_deg=35.0, tilt_dir_deg=0.0)
+    axis = R.T @ np.array([0.0, 0.0, 1.0])  # the camera's axis in the pad's frame
+    position = -2.5 * axis  # 2.5 m from the pad along the axis: it is in the middle
+    frame = render(scene, CAM, position, R, snr_db=30.0, rng=np.random.default_rng(3))
+    # with the attitude that goes with the picture, the pad is found ...
+    assert process_frame(frame, reference, CAM, gravity_hint=gravity_of(position, R)).detected
+    # ... but a level camera (down along its axis) cannot see a flat pad this slanted
+    level = process_frame(frame, reference, CAM, gravity_hint=np.array([0.0, 0.0, 1.0]))
+    assert not level.detected
+
+
+@pytest.mark.parametrize("bad", [[0, 0, 0], [np.nan, 0, 1], [1, 2], "down"])
+def test_a_bad_hint_is_a_clear_error(reference, bad):
+    frame = np.zeros((480, 640, 3), np.uint8)
+    with pytest.raises(ValueError, match="gravity_hint"):
+        process_frame(frame, reference, CAM, gravity_hint=bad)
