@@ -496,6 +496,15 @@ class PrecLandSetup(Model):
     detail: str
 
 
+class ExtNavSetup(Model):
+    """The external-navigation (GPS-denied landing) set-up: what was written, the reboot."""
+
+    ok: bool
+    writes: list[ParamWriteResult]
+    reboot: CommandResult | None
+    detail: str
+
+
 class BatteryThresholds(Model):
     """The vehicle's BATT_* thresholds (null: no such parameter, or not read yet)."""
 

@@ -60,6 +60,7 @@ T_ATTITUDE, T_GPS_FIX, T_ORIGIN, T_PREARM, T_POSITION = 4.0, 10.0, 20.0, 24.0, 4
 PREARM_DISPLAY_PERIOD = 30.0  # ArduPilot repeats failing pre-arm checks every 30 s
 LAND_DETECT_S = 1.0  # LAND_DETECTOR_TRIGGER_SEC
 FORCE_ARM_MAGIC = 21196
+ARMING_CHECK_VISION = 1 << 18  # AP_Arming::Check::VISION
 EARTH_RADIUS = 6378137.0
 
 
@@ -226,9 +227,18 @@ class SimVehicle(FlightModes):
         reasons = [] if self.gps_fix else ["GPS 1: Bad fix"]
         if self.gps_fix and t < self._t(T_PREARM):
             reasons.append("AHRS: waiting for home")
-        if self.nav.viso_backend and not self.nav.vision_healthy(self.time_s):
+        if (
+            self.nav.viso_backend
+            and self._arming_check(ARMING_CHECK_VISION)
+            and not self.nav.vision_healthy(self.time_s)
+        ):
             reasons.append("VisOdom: not healthy")
         return reasons
+
+    def _arming_check(self, bit: int) -> bool:
+        """ARMING_CHECK has ``bit`` (or bit 0: all checks)."""
+        value = int(self.params.get("ARMING_CHECK"))
+        return bool(value & 1 or value & bit)
 
     def arming_failures(self, mode: int | None = None) -> list[str]:
         """Every reason ArduCopter would give for refusing to arm in ``mode`` now."""
