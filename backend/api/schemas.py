@@ -207,7 +207,7 @@ class MissionSnapshot(Model):
     """A mission's live state (the precision-landing panel)."""
 
     kind: Literal["hover", "land", "mission"]
-    strategy: Literal["plnd", "guided"] | None
+    strategy: Literal["plnd", "guided", "extnav"] | None
     state: str
     state_age_s: float
     elapsed_s: float

@@ -43,8 +43,10 @@ def test_gps_lost_over_the_pad_lands_on_vision():
     assert "no_fix_at" in gps, "GPS never lost its fix"
     states = [s["state"] for s in result.states]
     assert states[:3] == ["check", "approach", "align"], states
-    assert ["switch", "settle", "descend"] == [
-        s for s in states if s in ("switch", "settle", "descend")
+    assert [s for s in states if s in ("switch", "settle", "descend")] == [
+        "switch",
+        "settle",
+        "descend",
     ]
     assert states[-1] == "landed"
     record = result.record
