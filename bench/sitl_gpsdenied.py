@@ -25,6 +25,7 @@ import math
 import statistics
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
@@ -71,6 +72,10 @@ def _reboot_and_wait(link: VehicleLink, obs: SitlObserver, speedup: float) -> No
         lambda t: (t.local_position_rx_monotonic or 0.0) > gps.rx - 0.5, _wall(10, speedup)
     ):
         raise RunError("no position estimate after the reboot")
+
+
+def _reached(obs: SitlObserver, boot_s: float) -> Callable[[], bool]:
+    return lambda: (obs.boot_s or 0.0) >= boot_s
 
 
 def fly_once(
@@ -189,7 +194,7 @@ def _fly(
     while not mission.done:
         if time.monotonic() > limit:
             raise RunError(f"the mission did not end (state {mission.state})")
-        if not obs.wait(lambda due=next_frame: (obs.boot_s or 0.0) >= due, 5.0):
+        if not obs.wait(_reached(obs, next_frame), 5.0):
             raise RunError("the vehicle's clock stopped")
         truth, t_capture = obs.truth(origin), obs.boot_s or 0.0
         next_frame = max(next_frame + 1.0 / CAMERA_HZ, t_capture)
