@@ -78,6 +78,34 @@ def _reached(obs: SitlObserver, boot_s: float) -> Callable[[], bool]:
     return lambda: (obs.boot_s or 0.0) >= boot_s
 
 
+def _camera_config(seed: int, snr_db: float, ground_d: float = 0.0) -> SimCameraConfig:
+    return SimCameraConfig(
+        pad_north_m=PAD_NE[0],
+        pad_east_m=PAD_NE[1],
+        pad_down_m=ground_d,
+        pad_heading_deg=PAD_HEADING_DEG,
+        pad_size_m=PAD_SIZE_M,
+        snr_db=snr_db,
+        seed=seed,
+    )
+
+
+def _pipeline_latency_ms(seed: int, snr_db: float, frames: int = 15) -> float:
+    """Render and process a few frames over the pad: the capture -> result time the
+    station's set-up would have measured (its VISO_DELAY_MS), median, on this machine."""
+    cfg = _camera_config(seed, snr_db)
+    renderer = PadRenderer(cfg)
+    reference = Reference.from_image(make_pad_image(800), PAD_SIZE_M)
+    times = []
+    for i in range(frames):
+        pose = VehiclePose((PAD_NE[0] + 0.02 * i, PAD_NE[1], -3.0), 0.0, 0.0, 0.5, 0.0)
+        w0 = time.perf_counter()
+        image, _ = renderer.render(pose)
+        process_frame(image, reference, cfg.camera)
+        times.append((time.perf_counter() - w0) * 1000.0)
+    return statistics.median(times)
+
+
 def fly_once(
     *,
     seed: int,
@@ -120,7 +148,9 @@ def _fly(
         raise RunError("the link did not come up")
     wait_ready(obs, timeout=_wall(90, boot_speedup))
     # the station's own set-up: parameters, then a reboot (VISO_TYPE is read at boot)
-    params = ParamService(link, EventLog(None), latency_ms=lambda: None)
+    latency_ms = _pipeline_latency_ms(seed, snr_db)
+    out["pipeline_latency_ms"] = round(latency_ms, 1)
+    params = ParamService(link, EventLog(None), latency_ms=lambda: latency_ms)
     epoch = obs.epoch_texts
     setup = params.setup_extnav()
     out["setup"] = setup["detail"]
@@ -170,15 +200,7 @@ def _fly(
             return None
         return TouchdownTruth(t.position_ned[0], t.position_ned[1], math.degrees(t.yaw))
 
-    cam_cfg = SimCameraConfig(
-        pad_north_m=PAD_NE[0],
-        pad_east_m=PAD_NE[1],
-        pad_down_m=ground_d,
-        pad_heading_deg=PAD_HEADING_DEG,
-        pad_size_m=PAD_SIZE_M,
-        snr_db=snr_db,
-        seed=seed,
-    )
+    cam_cfg = _camera_config(seed, snr_db, ground_d)
     renderer = PadRenderer(cam_cfg)
     blank = PadRenderer(replace(cam_cfg, pad_north_m=cam_cfg.pad_north_m + 1e4))
     camera = cam_cfg.camera

@@ -500,6 +500,8 @@ class ExtNavSetup(Model):
     """The external-navigation (GPS-denied landing) set-up: what was written, the reboot."""
 
     ok: bool
+    delay_ms: int = Field(description="VISO_DELAY_MS written (ms)")
+    latency_ms: float | None = Field(description="the measured capture -> result latency")
     writes: list[ParamWriteResult]
     reboot: CommandResult | None
     detail: str

@@ -63,6 +63,25 @@ SETTLE_S = 2.0
 #: Velocity from the positions of the last this many seconds (needs 3 spanning 0.15 s).
 SPEED_WINDOW_S = 0.4
 RESEND_S = 1.0
+#: The pad last seen within this of ``final_alt_m`` (m, camera height by vision): losing
+#: it is the blind last part (the 0.55 m pad overfills a 60-degree view below ~0.9 m).
+BLIND_MARGIN_M = 0.5
+#: VISO_DELAY_MS's documented range (ms).
+VISO_DELAY_RANGE_MS = (0, 250)
+
+
+def viso_delay_ms(latency_ms: float | None, send_ms: float = 10.0) -> int:
+    """VISO_DELAY_MS for a measured capture -> result latency: ArduPilot's jitter
+    correction takes the steady part of the delay for clock offset, so the EKF must be
+    told it (as PLND_LAG for precision landing).
+
+    >>> viso_delay_ms(42.3), viso_delay_ms(None), viso_delay_ms(900)
+    (52, 10, 250)
+    """
+    if latency_ms is None or not math.isfinite(latency_ms) or latency_ms < 0:
+        return 10  # ArduPilot's default: nothing measured yet
+    low, high = VISO_DELAY_RANGE_MS
+    return int(min(high, max(low, round(latency_ms + send_ms))))
 
 
 def extnav_missing(values: dict[str, float | None]) -> list[str]:
@@ -238,12 +257,14 @@ class ExtNavLandMission(LandMission):
         c = self.config
         if self._take_new_fix() is not None:
             return
+        # Blind when the pad was last seen close (the vision's own height: the EKF's baro
+        # height reads ~0.2 m high on SITL) or the estimate says it is low.
         height = self._height(tel)
-        if (
-            height is not None
-            and height <= c.final_alt_m + 0.3
-            and self._unseen_s() >= BLIND_AFTER_S
-        ):
+        last = self.fix.height_m if self.fix is not None else None
+        close = (last is not None and last <= c.final_alt_m + BLIND_MARGIN_M) or (
+            height is not None and height <= c.final_alt_m + 0.3
+        )
+        if close and self._unseen_s() >= BLIND_AFTER_S:
             self._set_state("final", "the pad fills the view: the last decimetres dead-reckoned")
             return
         self._lost_without_gps(now, tel)

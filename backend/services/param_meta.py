@@ -100,6 +100,7 @@ META: dict[str, ParamMeta] = {
         values={0: "None", 1: "MAVLink", 2: "IntelT265", 3: "VOXL"},
         reboot=True,
     ),
+    "VISO_DELAY_MS": ParamMeta("Visual odometry sensor delay", "ms", 0, 250),
     **{
         f"EK3_SRC{n}_POSXY": ParamMeta(
             f"EKF source set {n}: horizontal position",

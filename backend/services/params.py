@@ -20,6 +20,7 @@ from backend.missions.extnav import (
     ARMING_CHECK_ALL_BUT_VISION,
     ARMING_CHECK_VISION,
     EXTNAV_PARAMS,
+    viso_delay_ms,
 )
 from backend.services.events import EventLog
 from backend.services.param_meta import META, check_value
@@ -299,7 +300,9 @@ class ParamService:
                 "navigation (it ends in a reboot)."
             )
         why = "external navigation set-up"
-        wanted = list(EXTNAV_PARAMS)
+        latency = self._latency_ms()
+        delay = viso_delay_ms(latency, SEND_MS)
+        wanted = [*EXTNAV_PARAMS, ("VISO_DELAY_MS", float(delay))]
         checks = self._link.get_param("ARMING_CHECK", timeout=2.0)
         if checks is not None and int(checks) != 0:
             mask = int(checks)
@@ -312,15 +315,19 @@ class ParamService:
             if not write.result.ok:
                 return {
                     "ok": False,
+                    "delay_ms": delay,
+                    "latency_ms": latency,
                     "writes": [w.to_dict() for w in writes],
                     "reboot": None,
                     "detail": f"The vehicle refused {name}: {write.result.detail}; "
                     "nothing more was written and no reboot was sent.",
                 }
         reboot = self.reboot(why=why)
+        measured = "none measured yet" if latency is None else f"measured {latency:.0f} ms"
         detail = (
             f"External navigation set up: {len(writes)} parameters written (VISO_TYPE 1, "
-            "EKF source set 2 = vision position and velocity, baro height, compass yaw)"
+            "EKF source set 2 = vision position and velocity, baro height, compass yaw; "
+            f"VISO_DELAY_MS {delay}: {measured} capture to result, plus {SEND_MS:g} ms to send)"
         )
         detail += (
             "; the autopilot is rebooting."
@@ -329,6 +336,8 @@ class ParamService:
         )
         return {
             "ok": reboot.ok,
+            "delay_ms": delay,
+            "latency_ms": latency,
             "writes": [w.to_dict() for w in writes],
             "reboot": reboot.to_dict(),
             "detail": detail,

@@ -1107,8 +1107,18 @@ export interface components {
          * @description The external-navigation (GPS-denied landing) set-up: what was written, the reboot.
          */
         ExtNavSetup: {
+            /**
+             * Delay Ms
+             * @description VISO_DELAY_MS written (ms)
+             */
+            delay_ms: number;
             /** Detail */
             detail: string;
+            /**
+             * Latency Ms
+             * @description the measured capture -> result latency
+             */
+            latency_ms: number | null;
             /** Ok */
             ok: boolean;
             reboot: components["schemas"]["CommandResult"] | null;

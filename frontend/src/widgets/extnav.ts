@@ -26,6 +26,7 @@ export async function setupExtnav(ctx: Ctx): Promise<{ ok: boolean; text: string
     lines: [
       "VISO_TYPE = 1 (MAVLink: this station's VISION_POSITION_ESTIMATE from the pad's pose).",
       "EKF source set 2: EK3_SRC2_POSXY = 6 and EK3_SRC2_VELXY = 6 (vision), EK3_SRC2_POSZ = 1 (baro), EK3_SRC2_YAW = 1 (compass). Set 1 stays GPS; the landing switches to set 2 over the pad.",
+      "VISO_DELAY_MS = the measured capture-to-result latency plus 10 ms to send (ArduPilot takes the steady part of the delay for clock offset).",
       "ARMING_CHECK without the vision check: the pad is not in view on the ground, and with VISO_TYPE 1 ArduCopter refuses to arm without vision.",
       "If the pad is lost without GPS the landing comes down where it is (LAND), not on the pad.",
       "Then the autopilot reboots (VISO_TYPE is read at boot): the link drops for a few seconds. The vehicle must be disarmed.",

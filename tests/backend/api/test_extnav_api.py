@@ -94,7 +94,10 @@ def test_gps_lost_over_the_pad_lands_on_vision_through_the_station(client):
     done = wait_for(lambda: (m := current(client)) and m.get("outcome") and m, timeout=90, step=0.5)
     assert done["outcome"] == "landed", done
     assert "on vision navigation (ExternalNav)" in done["message"]
-    assert done["touchdown"]["error_m"] < 0.15
+    # measured from telemetry here (the vehicle's own vision-fed estimate, not the truth):
+    # the precision against the truth is test_land_extnav's (lockstep) and bench.sitl_gpsdenied's
+    assert done["touchdown"]["source"] == "telemetry"
+    assert done["touchdown"]["error_m"] < 0.30
     wait_for(lambda: current(client)["stored"], timeout=5)
     run = client.get(f"/api/missions/{client.get('/api/missions').json()[0]['id']}").json()
     states = [s["state"] for s in run["detail"]["states"]]
