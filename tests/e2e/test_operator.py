@@ -175,6 +175,11 @@ def test_precision_landing_is_set_up_in_one_step(page, station):
 
 def test_gps_denied_landing_is_set_up_in_one_step(page, station):
     open_dashboard(page, station)
+    # an earlier test's reboot may still be under way (the set-up needs the link): the
+    # newest "link up" in the log (newest first) comes before any "autopilot reboot sent"
+    log = page.get_by_test_id("event-log")
+    back = re.compile(r"^(?:(?!autopilot reboot sent).)*link up", re.S)
+    expect(log).to_have_text(back, timeout=30_000)
     extnav = page.get_by_test_id("extnav-state")
     expect(extnav).to_contain_text("GPS-denied landing is not set up", timeout=20_000)
     page.get_by_test_id("extnav-setup").click()
@@ -183,7 +188,6 @@ def test_gps_denied_landing_is_set_up_in_one_step(page, station):
     expect(outcome).to_contain_text("External navigation set up", timeout=20_000)
     expect(outcome).to_contain_text("the autopilot is rebooting.")
     expect(extnav).to_contain_text("GPS-denied landing is set up on the vehicle", timeout=30_000)
-    log = page.get_by_test_id("event-log")
     expect(log).to_contain_text("parameter VISO_TYPE set from 0 to 1 (external navigation set-up)")
     assert not page.errors, page.errors
 
