@@ -33,7 +33,13 @@ from typing import Any
 import numpy as np
 
 from backend.link import Telemetry
-from backend.missions.land import BLIND_AFTER_S, CENTRED_FIXES, FINAL_TIMEOUT_S, LandMission
+from backend.missions.land import (
+    BLIND_AFTER_S,
+    CENTRED_FIXES,
+    FINAL_TIMEOUT_S,
+    RESEND_S,
+    LandMission,
+)
 from backend.missions.mission import Mission, VisionSample
 
 #: What the external-navigation set-up writes (then a reboot: VISO_TYPE is read at boot).
@@ -52,8 +58,8 @@ EXTNAV_PARAMS: tuple[tuple[str, float], ...] = (
 #: without it.
 ARMING_CHECK_VISION = 1 << 18
 ARMING_CHECK_ALL_BUT_VISION = (1 << 21) - 2 - ARMING_CHECK_VISION
-#: Source sets: 1 GPS (as the vehicle boots), 2 ExternalNav.
-GPS_SOURCE_SET, VISION_SOURCE_SET = 1, 2
+#: The source set the set-up makes vision's (set 1 stays GPS, as the vehicle boots).
+VISION_SOURCE_SET = 2
 #: Pad positions (EKF frame) averaged before the switch: one fix is not a frame.
 PAD_FIXES = 10
 #: Vision sent this long before the switch: ArduPilot calls it healthy within 0.3 s.
@@ -62,7 +68,6 @@ FEED_BEFORE_SWITCH_S = 0.5
 SETTLE_S = 2.0
 #: Velocity from the positions of the last this many seconds (needs 3 spanning 0.15 s).
 SPEED_WINDOW_S = 0.4
-RESEND_S = 1.0
 #: The pad last seen within this of ``final_alt_m`` (m, camera height by vision): losing
 #: it is the blind last part (the 0.55 m pad overfills a 60-degree view below ~0.9 m).
 BLIND_MARGIN_M = 0.5
