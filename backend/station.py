@@ -69,6 +69,8 @@ class StandIn(Protocol):
 
     def stop(self) -> None: ...
 
+    def truth(self) -> Any: ...
+
 
 @dataclass(eq=False)
 class Station:
@@ -198,7 +200,7 @@ def build_station(settings: Settings) -> Station:
         )
 
         camera = _camera_model(settings)
-        source = _open_camera(settings, camera, link)
+        source = _open_camera(settings, camera, link, stand_in)
         results: FrameBus[Processed] = FrameBus("results")
 
         def hints() -> dict[str, Any]:
@@ -382,14 +384,23 @@ def _start_stand_in(settings: Settings) -> StandIn:
     return server
 
 
-def _open_camera(settings: Settings, camera: Camera, link: VehicleLink) -> FrameSource:
+def _open_camera(
+    settings: Settings, camera: Camera, link: VehicleLink, stand_in: StandIn | None = None
+) -> FrameSource:
     if settings.camera.partition(":")[0].lower() != "sim":
         return open_source(settings.camera)
-    # The simulated camera, when the user asked for it: renders the pad from the pose
-    # the vehicle reports (LOCAL_POSITION_NED + ATTITUDE), stand-in or SITL alike.
+    # The simulated camera, when the user asked for it: renders the pad from the stand-in's
+    # true pose when it runs here (so vision sees what the vehicle's own estimate gets
+    # wrong: what a GPS-denied landing corrects), else from the pose the vehicle reports
+    # (LOCAL_POSITION_NED + ATTITUDE, e.g. SITL).
     from sim.camera import SimCamera, SimCameraConfig, VehiclePose
 
     def vehicle_pose() -> VehiclePose | None:
+        if stand_in is not None and link.telemetry.position_ned is not None:
+            truth = stand_in.truth()
+            return VehiclePose(
+                tuple(truth.position_ned), truth.roll, truth.pitch, truth.yaw, time.monotonic()
+            )
         tel = link.telemetry
         if tel.position_ned is None or tel.attitude is None:
             return None

@@ -207,7 +207,7 @@ class MissionSnapshot(Model):
     """A mission's live state (the precision-landing panel)."""
 
     kind: Literal["hover", "land", "mission"]
-    strategy: Literal["plnd", "guided"] | None
+    strategy: Literal["plnd", "guided", "extnav"] | None
     state: str
     state_age_s: float
     elapsed_s: float
@@ -490,6 +490,17 @@ class ParamWriteResult(Model):
 class PrecLandSetup(Model):
     ok: bool
     lag_s: float = Field(description="PLND_LAG written (s)")
+    latency_ms: float | None = Field(description="the measured capture -> result latency")
+    writes: list[ParamWriteResult]
+    reboot: CommandResult | None
+    detail: str
+
+
+class ExtNavSetup(Model):
+    """The external-navigation (GPS-denied landing) set-up: what was written, the reboot."""
+
+    ok: bool
+    delay_ms: int = Field(description="VISO_DELAY_MS written (ms)")
     latency_ms: float | None = Field(description="the measured capture -> result latency")
     writes: list[ParamWriteResult]
     reboot: CommandResult | None

@@ -28,6 +28,10 @@ from backend.link.state import LinkState
 class LinkCommands(LinkCore):
     """The commands of :class:`~backend.link.VehicleLink`."""
 
+    #: VISION_POSITION_ESTIMATE / VISION_SPEED_ESTIMATE sent so far.
+    vision_positions_sent: int = 0
+    vision_speeds_sent: int = 0
+
     # ------------------------------------------------------------------ commands
     def arm(self) -> CommandResult:
         """Arm (MAV_CMD_COMPONENT_ARM_DISARM param1 = 1); refusals carry the reasons."""
@@ -167,6 +171,72 @@ class LinkCommands(LinkCore):
                 }
             )
         return result
+
+    def send_vision_position(
+        self,
+        north: float,
+        east: float,
+        down: float,
+        roll: float,
+        pitch: float,
+        yaw: float,
+        *,
+        time_usec: int,
+        reset_counter: int = 0,
+    ) -> CommandResult:
+        """Send VISION_POSITION_ESTIMATE: the vehicle's position from vision (m, the EKF
+        origin's NED) and attitude (rad), ``time_usec`` the frame's capture time on the
+        vehicle's clock. ArduCopter fuses it with VISO_TYPE 1 (read at boot) when the
+        active EKF source set takes ExternalNav. Not acknowledged: ``ok`` means sent."""
+        try:
+            fields = cmd.vision_position_estimate(
+                north,
+                east,
+                down,
+                roll,
+                pitch,
+                yaw,
+                time_usec=time_usec,
+                reset_counter=reset_counter,
+            )
+        except ValueError as exc:
+            return self._invalid("vision_position", exc)
+        result = self._send_unacked(
+            "vision_position", mavlink2.MAVLink_vision_position_estimate_message(**fields)
+        )
+        if result.ok:
+            self.vision_positions_sent += 1
+        return result
+
+    def send_vision_speed(
+        self, vn: float, ve: float, vd: float, *, time_usec: int, reset_counter: int = 0
+    ) -> CommandResult:
+        """Send VISION_SPEED_ESTIMATE: the vehicle's velocity from vision (m/s, NED),
+        stamped like :meth:`send_vision_position`. Not acknowledged: ``ok`` means sent."""
+        try:
+            fields = cmd.vision_speed_estimate(
+                vn, ve, vd, time_usec=time_usec, reset_counter=reset_counter
+            )
+        except ValueError as exc:
+            return self._invalid("vision_speed", exc)
+        result = self._send_unacked(
+            "vision_speed", mavlink2.MAVLink_vision_speed_estimate_message(**fields)
+        )
+        if result.ok:
+            self.vision_speeds_sent += 1
+        return result
+
+    def set_ekf_source_set(self, number: int) -> CommandResult:
+        """Switch the EKF's position/velocity/yaw sources to EK3_SRC<number>_*
+        (MAV_CMD_SET_EKF_SOURCE_SET). ArduCopter announces nothing and resets its
+        position to the new source's at once."""
+        try:
+            number = cmd.check_source_set(number)
+        except ValueError as exc:
+            return self._invalid("set_ekf_source_set", exc)
+        return self._command_long(
+            f"set_ekf_source_set {number}", mavlink2.MAV_CMD_SET_EKF_SOURCE_SET, (number,)
+        )
 
     def rc_override(self, channels: Mapping[int, int]) -> CommandResult:
         """Override RC channels: ``{channel (1-based): pwm}``; 0 releases, 65535 ignores.

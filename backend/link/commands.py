@@ -353,10 +353,7 @@ def landing_target(
     The angle fields are filled in as well, for consumers that read them.
     """
     fx, fy, fz = finite(x, "x"), finite(y, "y"), finite(z, "z")
-    if isinstance(time_usec, bool) or not isinstance(time_usec, int) or time_usec < 0:
-        raise ValueError(f"time_usec must be a non-negative int, got {time_usec!r}")
-    if time_usec >= 2**64:
-        raise ValueError(f"time_usec must fit in 64 bits, got {time_usec!r}")
+    time_usec = check_time_usec(time_usec)
     if frame not in mavlink2.enums["MAV_FRAME"]:
         raise ValueError(f"frame must be a MAV_FRAME value, got {frame!r}")
     if distance is None:
@@ -385,6 +382,92 @@ def landing_target(
         "q": [1.0, 0.0, 0.0, 0.0],
         "type": int(target_type),
         "position_valid": 1,
+    }
+
+
+def check_time_usec(time_usec: Any) -> int:
+    """Validate a timestamp in microseconds: a non-negative int that fits in 64 bits."""
+    if isinstance(time_usec, bool) or not isinstance(time_usec, int) or time_usec < 0:
+        raise ValueError(f"time_usec must be a non-negative int, got {time_usec!r}")
+    if time_usec >= 2**64:
+        raise ValueError(f"time_usec must fit in 64 bits, got {time_usec!r}")
+    return time_usec
+
+
+#: MAV_CMD_SET_EKF_SOURCE_SET's source sets (EK3_SRC1_* .. EK3_SRC3_*).
+EKF_SOURCE_SETS = (1, 2, 3)
+
+
+def check_source_set(number: Any) -> int:
+    """Validate an EKF source set number: 1, 2 or 3."""
+    if isinstance(number, bool) or not isinstance(number, int) or number not in EKF_SOURCE_SETS:
+        raise ValueError(f"source_set must be 1, 2 or 3, got {number!r}")
+    return number
+
+
+def _check_reset_counter(reset_counter: Any) -> int:
+    if (
+        isinstance(reset_counter, bool)
+        or not isinstance(reset_counter, int)
+        or not 0 <= reset_counter <= 255
+    ):
+        raise ValueError(f"reset_counter must be an int in 0..255, got {reset_counter!r}")
+    return reset_counter
+
+
+def vision_position_estimate(
+    north: Any,
+    east: Any,
+    down: Any,
+    roll: Any,
+    pitch: Any,
+    yaw: Any,
+    *,
+    time_usec: Any,
+    reset_counter: Any = 0,
+) -> dict[str, Any]:
+    """Fields of a VISION_POSITION_ESTIMATE: the vehicle's position (m, NED of the EKF's
+    origin: ArduPilot resets its estimate to it on a source switch) and attitude (rad),
+    ``time_usec`` the frame's capture time on the vehicle's clock (ArduPilot corrects
+    the transport jitter against its own clock). The covariance is unknown (NaN first
+    element): ArduPilot then uses VISO_POS_M_NSE / VISO_YAW_M_NSE.
+    """
+    values = [
+        finite(v, n)
+        for v, n in (
+            (north, "north"),
+            (east, "east"),
+            (down, "down"),
+            (roll, "roll"),
+            (pitch, "pitch"),
+            (yaw, "yaw"),
+        )
+    ]
+    return {
+        "usec": check_time_usec(time_usec),
+        "x": values[0],
+        "y": values[1],
+        "z": values[2],
+        "roll": values[3],
+        "pitch": values[4],
+        "yaw": values[5],
+        "covariance": [math.nan] + [0.0] * 20,
+        "reset_counter": _check_reset_counter(reset_counter),
+    }
+
+
+def vision_speed_estimate(
+    vn: Any, ve: Any, vd: Any, *, time_usec: Any, reset_counter: Any = 0
+) -> dict[str, Any]:
+    """Fields of a VISION_SPEED_ESTIMATE: the vehicle's velocity (m/s, NED), stamped like
+    :func:`vision_position_estimate`; unknown covariance (VISO_VEL_M_NSE applies)."""
+    return {
+        "usec": check_time_usec(time_usec),
+        "x": finite(vn, "vn"),
+        "y": finite(ve, "ve"),
+        "z": finite(vd, "vd"),
+        "covariance": [math.nan] + [0.0] * 8,
+        "reset_counter": _check_reset_counter(reset_counter),
     }
 
 

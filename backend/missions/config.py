@@ -9,7 +9,7 @@ import numpy as np
 
 from backend.missions.geometry import DOWN_MOUNT
 
-STRATEGIES = ("plnd", "guided")
+STRATEGIES = ("plnd", "guided", "extnav")
 ABORT_MODES = ("LOITER", "RTL")
 
 
@@ -58,7 +58,10 @@ class LandConfig:
     ----------
     strategy : "plnd" or "guided"
         ``plnd``: ArduCopter's precision landing (LAND mode fed LANDING_TARGET);
-        ``guided``: GUIDED velocity targets from the vision pose, then a blind LAND.
+        ``guided``: GUIDED velocity targets from the vision pose, then a blind LAND;
+        ``extnav``: GPS-denied: centred over the pad on GPS, then the vision pose becomes
+        ArduPilot's position source (VISION_POSITION_ESTIMATE, EKF source set 2) and LAND
+        holds over the pad on it, with or without GPS (:mod:`backend.missions.extnav`).
     pad_north_m, pad_east_m, pad_down_m : float
         Where the pad is expected (local NED, m): flown to while it is not in view, and
         the reference for touchdown errors taken from telemetry.

@@ -21,8 +21,8 @@ from typing import Any
 
 from backend.framebus import FrameBus
 from backend.missions.config import HoverConfig, LandConfig
+from backend.missions.extnav import land_mission
 from backend.missions.hover import HoverMission
-from backend.missions.land import LandMission
 from backend.missions.mission import Mission, VisionSample
 from backend.storage import Storage
 from backend.vision_worker import Processed
@@ -101,7 +101,7 @@ class MissionManager:
     # --- the operator ------------------------------------------------------------------------
     def start_land(self, config: LandConfig) -> dict:
         """Start a landing; raises :class:`MissionBusy` when one runs."""
-        return self._start(lambda now, cb: LandMission(self.link, config, now=now, on_change=cb))
+        return self._start(lambda now, cb: land_mission(self.link, config, now=now, on_change=cb))
 
     def start_hover(self, config: HoverConfig) -> dict:
         """Start a hover; raises :class:`MissionBusy` when one runs."""

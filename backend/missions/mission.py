@@ -26,7 +26,7 @@ from pipeline import Camera, FrameResult
 #: Below this RC throttle (us) LOITER would descend: no pilot, or the stick is down.
 LOITER_MIN_THROTTLE_PWM = 1400
 #: States after which a mission does nothing more.
-TERMINAL = ("landed", "completed", "aborted", "failed", "link_lost")
+TERMINAL = ("landed", "landed_in_place", "completed", "aborted", "failed", "link_lost")
 
 
 @dataclass(frozen=True, eq=False)

@@ -7,7 +7,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 #: Terminal outcomes of a run.
-OUTCOMES = ("landed", "completed", "aborted", "failed", "link_lost")
+#: ``landed_in_place``: came down where it was after the pad was lost with no GPS (an
+#: ExternalNav landing without its vision): not a landing on the pad.
+OUTCOMES = ("landed", "landed_in_place", "completed", "aborted", "failed", "link_lost")
 #: Targets kept in a stored record; beyond this only the count grows (a long hover at
 #: 20 Hz must not make a row of megabytes).
 MAX_TARGETS = 5000

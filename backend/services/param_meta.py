@@ -94,6 +94,54 @@ META: dict[str, ParamMeta] = {
     "BATT_LOW_TIMER": ParamMeta("Time below the low voltage before the failsafe", "s", 0, 120),
     "BATT_FS_LOW_ACT": ParamMeta("Low battery failsafe action", values=_BATT_FS),
     "BATT_FS_CRT_ACT": ParamMeta("Critical battery failsafe action", values=_BATT_FS),
+    # --- external navigation (AP_VisualOdom, EKF3 source sets) ---
+    "VISO_TYPE": ParamMeta(
+        "Visual odometry camera connection type (read at boot)",
+        values={0: "None", 1: "MAVLink", 2: "IntelT265", 3: "VOXL"},
+        reboot=True,
+    ),
+    "VISO_DELAY_MS": ParamMeta("Visual odometry sensor delay", "ms", 0, 250),
+    **{
+        f"EK3_SRC{n}_POSXY": ParamMeta(
+            f"EKF source set {n}: horizontal position",
+            values={0: "None", 3: "GPS", 4: "Beacon", 6: "ExternalNav"},
+        )
+        for n in (1, 2, 3)
+    },
+    **{
+        f"EK3_SRC{n}_VELXY": ParamMeta(
+            f"EKF source set {n}: horizontal velocity",
+            values={0: "None", 3: "GPS", 4: "Beacon", 5: "OpticalFlow", 6: "ExternalNav"},
+        )
+        for n in (1, 2, 3)
+    },
+    **{
+        f"EK3_SRC{n}_POSZ": ParamMeta(
+            f"EKF source set {n}: vertical position",
+            values={
+                0: "None",
+                1: "Baro",
+                2: "RangeFinder",
+                3: "GPS",
+                4: "Beacon",
+                6: "ExternalNav",
+            },
+        )
+        for n in (1, 2, 3)
+    },
+    **{
+        f"EK3_SRC{n}_YAW": ParamMeta(
+            f"EKF source set {n}: yaw",
+            values={
+                0: "None",
+                1: "Compass",
+                2: "GPS",
+                3: "GPS with Compass fallback",
+                6: "ExternalNav",
+            },
+        )
+        for n in (1, 2, 3)
+    },
     # --- failsafes ---
     "FS_GCS_ENABLE": ParamMeta(
         "Ground station failsafe",
@@ -118,7 +166,8 @@ META: dict[str, ParamMeta] = {
         values={0: "Disabled", 1: "RTL", 3: "Land", 4: "SmartRTL or RTL"},
     ),
     # --- arming, flight ---
-    "ARMING_CHECK": ParamMeta("Arming checks (bitmask; 1: all)", low=0, high=2**20),
+    # bits 1 (all) .. 20 (OSD); 18 is the visual odometry's
+    "ARMING_CHECK": ParamMeta("Arming checks (bitmask; 1: all)", low=0, high=2**21 - 1),
     "DISARM_DELAY": ParamMeta("Disarm delay after landing", "s", 0, 127),
     "ANGLE_MAX": ParamMeta("Largest lean angle", "cdeg", 1000, 8000),
     "PILOT_SPEED_UP": ParamMeta("Pilot climb rate", "cm/s", 50, 500),

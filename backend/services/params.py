@@ -16,6 +16,12 @@ from dataclasses import dataclass
 from typing import Any
 
 from backend.link import CommandResult, LinkEvent, LinkState, VehicleLink
+from backend.missions.extnav import (
+    ARMING_CHECK_ALL_BUT_VISION,
+    ARMING_CHECK_VISION,
+    EXTNAV_PARAMS,
+    viso_delay_ms,
+)
 from backend.services.events import EventLog
 from backend.services.param_meta import META, check_value
 
@@ -32,7 +38,14 @@ LAG_RANGE_S = (0.02, 0.25)
 SEND_MS = 10.0
 BATTERY_PARAMS = ("BATT_LOW_VOLT", "BATT_CRT_VOLT", "BATT_LOW_MAH", "BATT_CRT_MAH", "BATT_CAPACITY")
 #: Read whenever the link comes up: the alerts' thresholds and the landing panel's PLND state.
-WATCHED = (*BATTERY_PARAMS, "PLND_ENABLED", "PLND_TYPE", "PLND_LAG")
+WATCHED = (
+    *BATTERY_PARAMS,
+    "PLND_ENABLED",
+    "PLND_TYPE",
+    "PLND_LAG",
+    "VISO_TYPE",
+    "EK3_SRC2_POSXY",
+)
 
 
 class UnknownParam(LookupError):
@@ -264,6 +277,66 @@ class ParamService:
         return {
             "ok": reboot.ok,
             "lag_s": lag,
+            "latency_ms": latency,
+            "writes": [w.to_dict() for w in writes],
+            "reboot": reboot.to_dict(),
+            "detail": detail,
+        }
+
+    def setup_extnav(self) -> dict[str, Any]:
+        """Write what a GPS-denied landing needs (ArduPilot's ExternalNav fed by this
+        station's VISION_POSITION_ESTIMATE; see :mod:`backend.missions.extnav`), then
+        reboot (VISO_TYPE is read at boot).
+
+        ARMING_CHECK keeps every check but the visual odometry's (the pad is not in view
+        on the ground, and with VISO_TYPE 1 ArduCopter refuses to arm without vision): a
+        mask of 1 (all) becomes all-but-vision, any other mask loses only that bit.
+        Stops at the first write the vehicle refuses; raises :class:`VehicleArmed` while
+        armed (nothing written).
+        """
+        if self._link.telemetry.armed:
+            raise VehicleArmed(
+                "The vehicle is armed: land and disarm before setting up external "
+                "navigation (it ends in a reboot)."
+            )
+        why = "external navigation set-up"
+        latency = self._latency_ms()
+        delay = viso_delay_ms(latency, SEND_MS)
+        wanted = [*EXTNAV_PARAMS, ("VISO_DELAY_MS", float(delay))]
+        checks = self._link.get_param("ARMING_CHECK", timeout=2.0)
+        if checks is not None and int(checks) != 0:
+            mask = int(checks)
+            mask = ARMING_CHECK_ALL_BUT_VISION if mask & 1 else mask & ~ARMING_CHECK_VISION
+            wanted.append(("ARMING_CHECK", float(mask)))
+        writes: list[Write] = []
+        for name, value in wanted:
+            write = self.write(name, value, why=why)
+            writes.append(write)
+            if not write.result.ok:
+                return {
+                    "ok": False,
+                    "delay_ms": delay,
+                    "latency_ms": latency,
+                    "writes": [w.to_dict() for w in writes],
+                    "reboot": None,
+                    "detail": f"The vehicle refused {name}: {write.result.detail}; "
+                    "nothing more was written and no reboot was sent.",
+                }
+        reboot = self.reboot(why=why)
+        measured = "none measured yet" if latency is None else f"measured {latency:.0f} ms"
+        detail = (
+            f"External navigation set up: {len(writes)} parameters written (VISO_TYPE 1, "
+            "EKF source set 2 = vision position and velocity, baro height, compass yaw; "
+            f"VISO_DELAY_MS {delay}: {measured} capture to result, plus {SEND_MS:g} ms to send)"
+        )
+        detail += (
+            "; the autopilot is rebooting."
+            if reboot.ok
+            else f"; the reboot was refused ({reboot.detail}), reboot it before landing."
+        )
+        return {
+            "ok": reboot.ok,
+            "delay_ms": delay,
             "latency_ms": latency,
             "writes": [w.to_dict() for w in writes],
             "reboot": reboot.to_dict(),

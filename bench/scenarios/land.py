@@ -26,16 +26,17 @@ import cv2
 from backend.link import DEFAULT_STREAM_RATES_HZ, LinkState, VehicleLink
 from backend.missions import (
     LandConfig,
-    LandMission,
     Mission,
     RunRecord,
     TouchdownTruth,
     VisionSample,
 )
+from backend.missions.extnav import ARMING_CHECK_ALL_BUT_VISION, EXTNAV_PARAMS, land_mission
 from backend.missions.geometry import camera_yaw_hint, heading_error_deg
 from pipeline import Reference, process_frame
 from pipeline.render import make_pad_image
 from sim.camera import PadRenderer, SimCameraConfig, VehiclePose
+from sim.vehicle.mavlink_server import REBOOT_SILENCE_S
 
 PAD_SIZE_M = 0.55
 #: Where the pad is, from home (the seed flew 6 m out).
@@ -269,12 +270,9 @@ def fly_to_start(driver: Any, spec: RunSpec, *, precland: bool | None = None) ->
             if link.get_param(name) != 1 and not link.set_param(name, 1).ok:
                 raise RuntimeError(f"set-up: could not set {name}")
         if driver.deterministic:  # PLND_TYPE is read at boot
-            if not link.reboot().ok:
-                raise RuntimeError("set-up: reboot refused")
-            # the stand-in is silent while it reboots; telemetry from before is stale
-            while driver.server.rebooting:
-                driver.advance(0.1)
-            driver.advance(0.5)
+            reboot_standin(driver)
+    if spec.strategy == "extnav":
+        setup_extnav(driver)
     _wait(driver, 0.1, lambda t: t.position_ned is not None, 30, "position estimate")
     if not link.set_mode("GUIDED").ok:
         raise RuntimeError("set-up: GUIDED refused")
@@ -307,6 +305,27 @@ def fly_to_start(driver: Any, spec: RunSpec, *, precland: bool | None = None) ->
                 return
         if driver.now() - t0 > SETUP_TIMEOUT_S:
             raise RuntimeError("set-up: did not reach the start")
+
+
+def setup_extnav(driver: Any) -> None:
+    """What the station's external-navigation set-up writes, then a reboot (VISO_TYPE is
+    read at boot; done on the stand-in, as for PLND_TYPE)."""
+    link = driver.link
+    wanted = [*EXTNAV_PARAMS, ("ARMING_CHECK", float(ARMING_CHECK_ALL_BUT_VISION))]
+    for name, value in wanted:
+        if link.get_param(name) != value and not link.set_param(name, value).ok:
+            raise RuntimeError(f"set-up: could not set {name}")
+    if driver.deterministic:
+        reboot_standin(driver)
+
+
+def reboot_standin(driver: Any) -> None:
+    """Reboot the lockstep stand-in and let its silent boot pass (it hears nothing
+    meanwhile, not even the barrier's parameter read)."""
+    if not driver.link.reboot().ok:
+        raise RuntimeError("set-up: reboot refused")
+    driver.server.advance(REBOOT_SILENCE_S + 0.5)
+    driver.advance(0.1)
 
 
 def camera_config(spec: RunSpec) -> SimCameraConfig:
@@ -404,7 +423,7 @@ def run_one(
             **(config_overrides or {}),
         )
         start = driver.now()
-        mission = LandMission(driver.link, config, now=start, touchdown_truth=driver.touchdown)
+        mission = land_mission(driver.link, config, now=start, touchdown_truth=driver.touchdown)
         fly(
             driver,
             mission,

@@ -107,6 +107,9 @@ class LockstepLink:
     def set_param(self, name: str, value: float) -> CommandResult:
         return self.pump(self.link.set_param, name, value)
 
+    def set_ekf_source_set(self, number: int) -> CommandResult:
+        return self.pump(self.link.set_ekf_source_set, number)
+
     # --- not acknowledged: sent at once, handled at the next sync -------------------------------
     def goto_local_ned(self, *args: Any, **kwargs: Any) -> CommandResult:
         return self.link.goto_local_ned(*args, **kwargs)
@@ -116,3 +119,9 @@ class LockstepLink:
 
     def send_landing_target(self, *args: Any, **kwargs: Any) -> CommandResult:
         return self.link.send_landing_target(*args, **kwargs)
+
+    def send_vision_position(self, *args: Any, **kwargs: Any) -> CommandResult:
+        return self.link.send_vision_position(*args, **kwargs)
+
+    def send_vision_speed(self, *args: Any, **kwargs: Any) -> CommandResult:
+        return self.link.send_vision_speed(*args, **kwargs)

@@ -60,6 +60,8 @@ T_ATTITUDE, T_GPS_FIX, T_ORIGIN, T_PREARM, T_POSITION = 4.0, 10.0, 20.0, 24.0, 4
 PREARM_DISPLAY_PERIOD = 30.0  # ArduPilot repeats failing pre-arm checks every 30 s
 LAND_DETECT_S = 1.0  # LAND_DETECTOR_TRIGGER_SEC
 FORCE_ARM_MAGIC = 21196
+ARMING_CHECK_VISION = 1 << 18  # AP_Arming::Check::VISION
+VISION_HISTORY_S = 1.0  # vision stamped further back is compared with the oldest truth
 EARTH_RADIUS = 6378137.0
 
 
@@ -142,6 +144,12 @@ class SimVehicle(FlightModes):
         self._plnd_sm = PrecLandStateMachine()
         # AP_VisualOdom likewise exists only if VISO_TYPE was 1 at boot.
         self.nav.reset(viso_backend=p.get("VISO_TYPE") == 1)
+        # The true position over the last second (boot s), for vision stamped in the past,
+        # and the smallest capture -> arrival lag seen (the jitter correction's offset).
+        self._truth_history: deque[tuple[float, Vec3]] = deque(
+            maxlen=int(VISION_HISTORY_S * self.config.physics_hz) + 2
+        )
+        self._vision_min_lag = math.inf
         # Home: where the vehicle boots (the EKF origin), then wherever it arms.
         self.home_ned: Vec3 = (0.0, 0.0, 0.0)
         self._update_estimate(force=True)
@@ -226,9 +234,18 @@ class SimVehicle(FlightModes):
         reasons = [] if self.gps_fix else ["GPS 1: Bad fix"]
         if self.gps_fix and t < self._t(T_PREARM):
             reasons.append("AHRS: waiting for home")
-        if self.nav.viso_backend and not self.nav.vision_healthy(self.time_s):
+        if (
+            self.nav.viso_backend
+            and self._arming_check(ARMING_CHECK_VISION)
+            and not self.nav.vision_healthy(self.time_s)
+        ):
             reasons.append("VisOdom: not healthy")
         return reasons
+
+    def _arming_check(self, bit: int) -> bool:
+        """ARMING_CHECK has ``bit`` (or bit 0: all checks)."""
+        value = int(self.params.get("ARMING_CHECK"))
+        return bool(value & 1 or value & bit)
 
     def arming_failures(self, mode: int | None = None) -> list[str]:
         """Every reason ArduCopter would give for refusing to arm in ``mode`` now."""
@@ -458,9 +475,30 @@ class SimVehicle(FlightModes):
         """LANDING_TARGET from a companion computer or GCS."""
         self.precland.handle_landing_target(msg, self.time_s)
 
-    def vision_position(self, north: float, east: float, down: float) -> bool:
-        """VISION_POSITION_ESTIMATE (NED, metres, in the vision system's frame)."""
-        return self.nav.vision_position(self.time_s, (north, east, down), self.body.pos)
+    def vision_position(
+        self, north: float, east: float, down: float, time_usec: int | None = None
+    ) -> bool:
+        """VISION_POSITION_ESTIMATE (NED, metres, in the vision system's frame) taken at
+        ``time_usec`` on this vehicle's clock. As AP_VisualOdom: the jitter correction
+        takes the smallest capture -> arrival lag for clock offset, and the EKF fuses the
+        pose VISO_DELAY_MS before that corrected time; the pose is compared with where
+        the vehicle truly was then (a wrong VISO_DELAY_MS shows as a lag error)."""
+        truth = self.body.pos
+        if time_usec:
+            captured = time_usec / 1e6
+            lag = self.boot_s - captured
+            if lag >= 0:
+                self._vision_min_lag = min(self._vision_min_lag, lag)
+                delay = self.params.get("VISO_DELAY_MS") / 1000.0
+                truth = self._truth_at(captured + self._vision_min_lag - delay)
+        return self.nav.vision_position(self.time_s, (north, east, down), truth)
+
+    def _truth_at(self, boot_s: float) -> Vec3:
+        """The true position at ``boot_s`` (the oldest kept, if earlier; now, if later)."""
+        for t, pos in reversed(self._truth_history):
+            if t <= boot_s:
+                return pos
+        return self._truth_history[0][1] if self._truth_history else self.body.pos
 
     def vision_speed(self) -> None:
         """VISION_SPEED_ESTIMATE."""
@@ -594,6 +632,7 @@ class SimVehicle(FlightModes):
             self._collective = 0.0
         was_on_ground = self.body.on_ground
         self.body.step(dt, self._motor_cmd)
+        self._truth_history.append((self.boot_s, self.body.pos))
         self._after_physics(was_on_ground, dt)
 
     def _announce(self) -> None:

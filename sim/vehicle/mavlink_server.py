@@ -656,7 +656,7 @@ class VehicleServer:
 
     def _on_vision_position(self, msg: mavlink.MAVLink_message) -> None:
         # Any sender, no target fields: GCS_MAVLINK::handle_vision_position_estimate.
-        self.sim.vision_position(msg.x, msg.y, msg.z)
+        self.sim.vision_position(msg.x, msg.y, msg.z, msg.usec)
 
     def _on_vision_speed(self, msg: mavlink.MAVLink_message) -> None:
         self.sim.vision_speed()

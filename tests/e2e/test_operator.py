@@ -173,6 +173,25 @@ def test_precision_landing_is_set_up_in_one_step(page, station):
     assert not page.errors, page.errors
 
 
+def test_gps_denied_landing_is_set_up_in_one_step(page, station):
+    open_dashboard(page, station)
+    # an earlier test's reboot may still be under way (the set-up needs the link): the
+    # newest "link up" in the log (newest first) comes before any "autopilot reboot sent"
+    log = page.get_by_test_id("event-log")
+    back = re.compile(r"^(?:(?!autopilot reboot sent).)*link up", re.S)
+    expect(log).to_have_text(back, timeout=30_000)
+    extnav = page.get_by_test_id("extnav-state")
+    expect(extnav).to_contain_text("GPS-denied landing is not set up", timeout=20_000)
+    page.get_by_test_id("extnav-setup").click()
+    confirm(page, expect_text="ARMING_CHECK without the vision check")
+    outcome = page.get_by_test_id("mission-outcome")
+    expect(outcome).to_contain_text("External navigation set up", timeout=20_000)
+    expect(outcome).to_contain_text("the autopilot is rebooting.")
+    expect(extnav).to_contain_text("GPS-denied landing is set up on the vehicle", timeout=30_000)
+    expect(log).to_contain_text("parameter VISO_TYPE set from 0 to 1 (external navigation set-up)")
+    assert not page.errors, page.errors
+
+
 def test_parameters_browse_search_edit_checked_and_reboot(page, station):
     open_dashboard(page, station, tab="params")
     expect(page.get_by_test_id("strip-link")).to_have_text("UP", timeout=30_000)

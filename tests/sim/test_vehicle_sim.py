@@ -348,3 +348,38 @@ def test_loiter_sticks_fly_the_vehicle_and_centred_sticks_brake() -> None:
     v.rc_override(255, [1500, 1500, 1500, 1500])
     v.step(5.0)
     assert math.hypot(*v.truth.velocity_ned[:2]) < 0.1
+
+
+@pytest.mark.parametrize(("declared_ms", "worst_m"), [(150, 0.03), (10, None)])
+def test_vision_is_fused_at_its_stamped_time_less_the_declared_delay(
+    declared_ms: int, worst_m: float | None
+) -> None:
+    # AP_VisualOdom: the steady capture -> arrival lag is taken for clock offset, so only
+    # VISO_DELAY_MS says how old a pose is; a pose 150 ms old declared as 10 ms pulls the
+    # estimate back along the track by speed x 0.14 s
+    v = _ready()
+    v.param_set("VISO_TYPE", 1)
+    v.param_set("VISO_DELAY_MS", declared_ms)
+    v.param_set("ARMING_CHECK", 1835006)  # all but vision: arms on GPS
+    assert v.reboot() == 0
+    v.step(1.0)
+    assert v.set_mode(GUIDED) == 0 and v.arm() == 0 and v.takeoff(5.0) == 0
+    v.step(10.0)
+    assert v.nav.set_source_set(1)
+    v.param_set("EK3_SRC1_POSXY", 6)  # vision as the position source
+    history: list[tuple[float, tuple[float, float, float]]] = []
+    errors = []
+    for i in range(120):
+        history.append((v.boot_s, v.truth.position_ned))
+        if len(history) > 3:  # the pose of 3 frames ago (0.15 s), stamped with its time
+            t, pos = history[-4]
+            assert v.vision_position(*pos, round(t * 1e6))
+        v.guided_velocity(2.0, 0.0, 0.0)
+        v.step(0.05)
+        if i > 60:
+            errors.append(v.estimate.position_ned[0] - v.truth.position_ned[0])
+    worst = max(abs(e) for e in errors)
+    if worst_m is not None:
+        assert worst < worst_m
+    else:
+        assert min(errors) < -0.2  # lags behind the truth: 2 m/s x 0.14 s

@@ -14,6 +14,7 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
+from backend.missions.extnav import ARMING_CHECK_ALL_BUT_VISION
 from sim.vehicle import ParamStore
 from sim.vision_feed import VisionStandIn
 from tests.sitl.support import Flight, horizontal, requires_sitl, start_flight
@@ -206,6 +207,19 @@ def _externalnav(f: Flight) -> VisionStandIn:
     vision = VisionStandIn(f.obs, f.origin()).start()
     f.wait_sim(2.0)
     return vision
+
+
+def test_visodom_arming_check_can_be_left_out(vehicle: Flight) -> None:
+    # the station's external-navigation set-up: the pad is not in view on the ground
+    f = vehicle
+    f.wait_ready()
+    f.set_param("VISO_TYPE", 1)
+    f.set_param("ARMING_CHECK", ARMING_CHECK_ALL_BUT_VISION)
+    f.reboot()
+    f.mode("GUIDED")
+    arm = f.link.arm()
+    assert arm.ok, arm.detail
+    assert f.link.disarm().ok
 
 
 def test_gps_lost_over_the_pad_lands_on_externalnav(vehicle: Flight) -> None:

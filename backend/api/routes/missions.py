@@ -50,11 +50,13 @@ class HoverRequest(StrictBody):
 
 
 class LandRequest(StrictBody):
-    strategy: Literal["plnd", "guided"] = Field(
+    strategy: Literal["plnd", "guided", "extnav"] = Field(
         "plnd",
         title="Strategy",
         description="plnd: ArduCopter's precision landing fed LANDING_TARGET; guided: GUIDED "
-        "velocity targets from the vision pose",
+        "velocity targets from the vision pose; extnav: GPS-denied: the vision pose becomes "
+        "ArduPilot's position (ExternalNav, after the external-navigation set-up) and LAND "
+        "holds over the pad on it; the pad lost without GPS lands in place",
     )
     approach_alt_m: float | None = Field(
         None,
@@ -150,7 +152,8 @@ def land(
     vehicle: VehicleDep,
     body: Annotated[LandRequest | None, Body()] = None,
 ) -> dict[str, Any]:
-    """Land on the pad by precision landing ("plnd") or GCS guidance ("guided")."""
+    """Land on the pad by precision landing ("plnd"), GCS guidance ("guided") or on vision
+    as the vehicle's position source, without GPS ("extnav")."""
     req = body or LandRequest()
     _check_link(vehicle)
     config = vehicle.land_config(**req.model_dump())

@@ -1,5 +1,6 @@
 """Vehicle parameters: list (with ArduCopter's documentation), download, write one,
-reboot the autopilot, and set up precision landing in one step.
+reboot the autopilot, and set up precision landing or external navigation (the GPS-denied
+landing) in one step each.
 
 Writes are checked against the parameter's type and documented range (422 with a
 sentence), confirmed by the vehicle's PARAM_VALUE echo (409 when it kept another
@@ -20,6 +21,7 @@ from backend.api.errors import OPERATOR_ERRORS, VIEWER_ERRORS, command_errors, e
 from backend.api.schemas import (
     BatteryThresholds,
     CommandResult,
+    ExtNavSetup,
     ParamListing,
     ParamWriteResult,
     PrecLandSetup,
@@ -150,6 +152,31 @@ def precland_setup(params: ParamsDep, vehicle: VehicleDep) -> Any:
     _need_link(vehicle, "nothing was written")
     try:
         outcome = params.setup_precland()
+    except VehicleArmed as exc:
+        raise HTTPException(status.HTTP_409_CONFLICT, str(exc)) from None
+    return JSONResponse(outcome, status_code=200 if outcome["ok"] else status.HTTP_409_CONFLICT)
+
+
+@router.post(
+    "/params/extnav-setup",
+    dependencies=[Operator],
+    response_model=ExtNavSetup,
+    responses={
+        **OPERATOR_ERRORS,
+        **errors(503),
+        409: {
+            "model": ExtNavSetup,
+            "description": "Armed (ErrorResponse), or the vehicle refused a write or the reboot.",
+        },
+    },
+)
+def extnav_setup(params: ParamsDep, vehicle: VehicleDep) -> Any:
+    """For the GPS-denied landing ("extnav"): VISO_TYPE 1 (MAVLink), EKF source set 2 =
+    ExternalNav position and velocity, baro height, compass yaw; ARMING_CHECK without the
+    vision check (the pad is not in view on the ground); then reboot."""
+    _need_link(vehicle, "nothing was written")
+    try:
+        outcome = params.setup_extnav()
     except VehicleArmed as exc:
         raise HTTPException(status.HTTP_409_CONFLICT, str(exc)) from None
     return JSONResponse(outcome, status_code=200 if outcome["ok"] else status.HTTP_409_CONFLICT)

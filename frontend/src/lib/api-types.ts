@@ -322,7 +322,8 @@ export interface paths {
         put?: never;
         /**
          * Land
-         * @description Land on the pad by precision landing ("plnd") or GCS guidance ("guided").
+         * @description Land on the pad by precision landing ("plnd"), GCS guidance ("guided") or on vision
+         *     as the vehicle's position source, without GPS ("extnav").
          */
         post: operations["land_api_missions_land_post"];
         delete?: never;
@@ -385,6 +386,28 @@ export interface paths {
         get: operations["battery_thresholds_api_params_battery_get"];
         put?: never;
         post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/params/extnav-setup": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Extnav Setup
+         * @description For the GPS-denied landing ("extnav"): VISO_TYPE 1 (MAVLink), EKF source set 2 =
+         *     ExternalNav position and velocity, baro height, compass yaw; ARMING_CHECK without the
+         *     vision check (the pad is not in view on the ground); then reboot.
+         */
+        post: operations["extnav_setup_api_params_extnav_setup_post"];
         delete?: never;
         options?: never;
         head?: never;
@@ -1079,6 +1102,29 @@ export interface components {
         } & {
             [key: string]: unknown;
         };
+        /**
+         * ExtNavSetup
+         * @description The external-navigation (GPS-denied landing) set-up: what was written, the reboot.
+         */
+        ExtNavSetup: {
+            /**
+             * Delay Ms
+             * @description VISO_DELAY_MS written (ms)
+             */
+            delay_ms: number;
+            /** Detail */
+            detail: string;
+            /**
+             * Latency Ms
+             * @description the measured capture -> result latency
+             */
+            latency_ms: number | null;
+            /** Ok */
+            ok: boolean;
+            reboot: components["schemas"]["CommandResult"] | null;
+            /** Writes */
+            writes: components["schemas"]["ParamWriteResult"][];
+        };
         /** FlightDeleted */
         FlightDeleted: {
             /** Freed Bytes */
@@ -1312,11 +1358,11 @@ export interface components {
             search_s: number;
             /**
              * Strategy
-             * @description plnd: ArduCopter's precision landing fed LANDING_TARGET; guided: GUIDED velocity targets from the vision pose
+             * @description plnd: ArduCopter's precision landing fed LANDING_TARGET; guided: GUIDED velocity targets from the vision pose; extnav: GPS-denied: the vision pose becomes ArduPilot's position (ExternalNav, after the external-navigation set-up) and LAND holds over the pad on it; the pad lost without GPS lands in place
              * @default plnd
              * @enum {string}
              */
-            strategy: "plnd" | "guided";
+            strategy: "plnd" | "guided" | "extnav";
         };
         /** LandingTargetSent */
         LandingTargetSent: {
@@ -1563,7 +1609,7 @@ export interface components {
             /** Stored */
             stored: boolean;
             /** Strategy */
-            strategy: ("plnd" | "guided") | null;
+            strategy: ("plnd" | "guided" | "extnav") | null;
             /** Target Age S */
             target_age_s: number | null;
             /** Targets Sent */
@@ -3492,6 +3538,62 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description The link to the vehicle is down, or the station is not running. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+        };
+    };
+    extnav_setup_api_params_extnav_setup_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ExtNavSetup"];
+                };
+            };
+            /** @description The operator token is missing or wrong. */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description Armed (ErrorResponse), or the vehicle refused a write or the reboot. */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ExtNavSetup"];
                 };
             };
             /** @description Validation Error */

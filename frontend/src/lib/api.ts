@@ -11,6 +11,7 @@ export type ParamListing = S["ParamListing"];
 export type ParamInfo = S["ParamInfo"];
 export type ParamWriteResult = S["ParamWriteResult"];
 export type PrecLandSetup = S["PrecLandSetup"];
+export type ExtNavSetup = S["ExtNavSetup"];
 export type AbortResult = S["AbortResult"];
 export type FlightSummary = S["FlightSummary"];
 export type FlightReplay = S["FlightReplay"];
@@ -174,6 +175,10 @@ export class ApiClient {
 
   preclandSetup(): Promise<PrecLandSetup> {
     return this.request("POST", "/api/params/precland-setup");
+  }
+
+  extnavSetup(): Promise<ExtNavSetup> {
+    return this.request("POST", "/api/params/extnav-setup");
   }
 
   reboot(): Promise<CommandOutcome> {

@@ -10,6 +10,7 @@ import { sentence } from "../lib/messages";
 import { readTelemetry } from "../lib/telemetry";
 import { confirmDialog } from "./confirm-dialog";
 import { type Ctx, COLORS, fields, fitCanvas, h, panel, rafThrottle, setText } from "./dom";
+import { extnavLine, setupExtnav } from "./extnav";
 import { setupPrecland } from "./precland";
 
 /** ArduPilot's AC_PrecLand: a measurement is used for 1 s, the target lost after 2 s. */
@@ -114,6 +115,8 @@ export function mountMissionPanel(root: HTMLElement, ctx: Ctx): void {
   ]);
   const plnd = h("div", { class: "plnd-line", "data-testid": "plnd-state" }, "Precision landing on the vehicle: reading its parameters…");
   const plndButton = h("button", { class: "btn btn-secondary btn-small", type: "button", "data-testid": "precland-setup" }, "Set up precision landing");
+  const extnav = h("div", { class: "plnd-line", "data-testid": "extnav-state" }, "GPS-denied landing on the vehicle: reading its parameters…");
+  const extnavButton = h("button", { class: "btn btn-secondary btn-small", type: "button", "data-testid": "extnav-setup" }, "Set up GPS-denied landing");
   const outcome = h("div", { class: "caption outcome-line", "data-testid": "mission-outcome", "aria-live": "polite" }, "");
   const hoverBox = h("div", { class: "mission-box" }, h("h3", { class: "sub-title" }, "Hover over the pad"));
   const landBox = h("div", { class: "mission-box" }, h("h3", { class: "sub-title" }, "Land on the pad"));
@@ -135,6 +138,7 @@ export function mountMissionPanel(root: HTMLElement, ctx: Ctx): void {
     "Landing",
     "mission",
     h("div", { class: "plnd-row" }, plnd, plndButton),
+    h("div", { class: "plnd-row" }, extnav, extnavButton),
     h("div", { class: "mission-forms" }, hoverBox, landBox),
     outcome,
     state,
@@ -158,6 +162,16 @@ export function mountMissionPanel(root: HTMLElement, ctx: Ctx): void {
       if (r) say(r.ok, r.text);
     } finally {
       plndButton.disabled = false;
+    }
+  });
+
+  extnavButton.addEventListener("click", async () => {
+    extnavButton.disabled = true;
+    try {
+      const r = await setupExtnav(ctx);
+      if (r) say(r.ok, r.text);
+    } finally {
+      extnavButton.disabled = false;
     }
   });
 
@@ -213,15 +227,21 @@ export function mountMissionPanel(root: HTMLElement, ctx: Ctx): void {
     const problem = invalid(landFields, v);
     if (problem) return say(false, problem);
     const plndOn = v.strategy === "plnd";
+    const extnavOn = v.strategy === "extnav";
     const lines = [
       `Looks for the pad from ${String(v.approach_alt_m ?? landFields.find((x) => x.name === "approach_alt_m")?.default)} m over its place, then centres and turns over it by vision (GUIDED).`,
       plndOn
         ? "Descends in LAND mode fed LANDING_TARGET from each frame: ArduCopter's precision landing steers."
-        : "Descends on GUIDED velocity targets from the vision pose, then LAND for the last few centimetres.",
-      `Pad unseen ${v.lost_timeout_s} s: climbs and searches ${v.search_s} s, then ${v.abort_mode}.`,
+        : extnavOn
+          ? "Then sends each frame's pose as the vehicle's position (VISION_POSITION_ESTIMATE), switches the EKF to source set 2 (vision) and descends in LAND on it: GPS is not needed from there."
+          : "Descends on GUIDED velocity targets from the vision pose, then LAND for the last few centimetres.",
+      extnavOn
+        ? "Pad lost once on vision (no GPS to hold on): lands where it is at once (LAND, level), not on the pad, and says so."
+        : `Pad unseen ${v.lost_timeout_s} s: climbs and searches ${v.search_s} s, then ${v.abort_mode}.`,
       "The vehicle must be flying (take off or hover first). ABORT stops it at any time and holds.",
     ];
-    if (!(await confirmDialog({ title: `Land on the pad (${plndOn ? "precision landing" : "GCS guidance"})?`, lines, confirmLabel: "Land on pad" }))) return;
+    const how = plndOn ? "precision landing" : extnavOn ? "GPS-denied, on vision" : "GCS guidance";
+    if (!(await confirmDialog({ title: `Land on the pad (${how})?`, lines, confirmLabel: "Land on pad" }))) return;
     await start("land", v);
   });
 
@@ -261,6 +281,20 @@ export function mountMissionPanel(root: HTMLElement, ctx: Ctx): void {
       );
       plnd.dataset.level = ready ? "ok" : "warn";
       plndButton.textContent = ready ? "Set up again" : "Set up precision landing";
+    } catch {
+      // the server is down: the line keeps what it said
+    }
+  }
+
+  // --- external navigation (the GPS-denied landing), as the vehicle reports it ---
+  async function loadExtnav(): Promise<void> {
+    try {
+      const l = await api.request<{ params: { name: string; value: number }[] }>("GET", "/api/params?names=VISO_TYPE,EK3_SRC2_POSXY");
+      const get = (n: string) => l.params.find((p) => p.name === n)?.value ?? null;
+      const line = extnavLine(get("VISO_TYPE"), get("EK3_SRC2_POSXY"));
+      setText(extnav, line.text);
+      extnav.dataset.level = line.ready ? "ok" : get("VISO_TYPE") === null ? "" : "warn";
+      extnavButton.textContent = line.ready ? "Set up again" : "Set up GPS-denied landing";
     } catch {
       // the server is down: the line keeps what it said
     }
@@ -422,10 +456,12 @@ export function mountMissionPanel(root: HTMLElement, ctx: Ctx): void {
     if (key !== lastLink) {
       lastLink = key;
       void loadPlnd();
+      void loadExtnav();
     }
   });
   setInterval(draw, 250);
   setInterval(() => void loadPlnd(), 5000);
+  setInterval(() => void loadExtnav(), 5000);
   render();
   void loadHistory();
 }

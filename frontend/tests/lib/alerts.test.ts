@@ -42,6 +42,9 @@ describe("activeAlerts", () => {
     const m = activeAlerts({ ...quiet, mission: { run_id: 3, outcome: "aborted", message: "pad not found", kind: "land" } });
     expect(m.map((a) => [a.id, a.title])).toEqual([["mission-3-aborted", "Mission aborted"]]);
     expect(activeAlerts({ ...quiet, mission: { run_id: 4, outcome: "landed", message: "" } })).toEqual([]);
+    // down where it was after the pad was lost without GPS: not on the pad
+    const inPlace = activeAlerts({ ...quiet, mission: { run_id: 6, outcome: "landed_in_place", message: "landed in place 1.10 m from the pad centre" } });
+    expect(inPlace.map((a) => [a.id, a.title])).toEqual([["mission-6-landed_in_place", "Mission landed off the pad"]]);
     // the operator's own abort is no surprise
     expect(activeAlerts({ ...quiet, mission: { run_id: 5, outcome: "aborted", message: "stopped by the operator's ABORT" } })).toEqual([]);
   });

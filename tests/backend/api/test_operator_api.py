@@ -119,7 +119,7 @@ def test_mission_defaults_are_those_of_the_requests(client):
     assert set(hover) == set(HoverRequest.model_fields)
     assert set(land) == set(LandRequest.model_fields)
     assert hover["altitude_m"]["default"] == 4.0 and hover["altitude_m"]["maximum"] == 100
-    assert land["strategy"]["choices"] == ["plnd", "guided"]
+    assert land["strategy"]["choices"] == ["plnd", "guided", "extnav"]
     assert all(f["title"] and f["description"] for f in [*hover.values(), *land.values()])
 
 

@@ -6,6 +6,7 @@ silent, drop the connection, send garbage) and checks what the link makes of it.
 
 from __future__ import annotations
 
+import math
 import os
 import random
 import threading
@@ -529,3 +530,61 @@ def test_ack_of_a_retransmission_is_not_taken_by_the_next_command(peer: Any, mak
     second = link.arm()
     assert second.ok, second  # not the FAILED that answered the retransmission
     assert arms == [0, 1, 0]
+
+
+def test_external_navigation_messages_and_the_source_set_command(peer: Any, make_link) -> None:
+    link = make_link(f"tcp:127.0.0.1:{peer.port}")
+    assert _up(link)
+    r = link.send_vision_position(1.5, -2.25, -4.0, 0.01, -0.02, 1.2, time_usec=123456789)
+    assert r.ok and r.result_name == "SENT"
+    vp = peer.wait_for("VISION_POSITION_ESTIMATE", 20.0)
+    assert vp.usec == 123456789
+    assert (vp.x, vp.y, vp.z) == pytest.approx((1.5, -2.25, -4.0))
+    assert (vp.roll, vp.pitch, vp.yaw) == pytest.approx((0.01, -0.02, 1.2))
+    assert math.isnan(vp.covariance[0]) and vp.reset_counter == 0
+    r = link.send_vision_speed(0.25, -0.5, 0.0, time_usec=123456790, reset_counter=3)
+    assert r.ok
+    vs = peer.wait_for("VISION_SPEED_ESTIMATE", 20.0)
+    assert vs.usec == 123456790 and (vs.x, vs.y, vs.z) == pytest.approx((0.25, -0.5, 0.0))
+    assert math.isnan(vs.covariance[0]) and vs.reset_counter == 3
+    assert link.vision_positions_sent == 1 and link.vision_speeds_sent == 1
+    r = link.set_ekf_source_set(2)
+    assert r.ok and r.result_name == "ACCEPTED" and r.command == "set_ekf_source_set 2"
+    cl = peer.wait_for(
+        "COMMAND_LONG", 20.0, lambda m: m.command == mavlink2.MAV_CMD_SET_EKF_SOURCE_SET
+    )
+    assert cl.command == 42007 and cl.param1 == 2
+
+
+def test_source_set_refusal_is_reported_verbatim(peer: Any, make_link) -> None:
+    def refuse(p: Any, msg: Any) -> bool:
+        if msg.get_type() == "COMMAND_LONG" and msg.command == 42007:
+            p.ack(msg.command, mavlink2.MAV_RESULT_DENIED)
+            return True
+        return False
+
+    peer.responder = refuse
+    link = make_link(f"tcp:127.0.0.1:{peer.port}")
+    assert _up(link)
+    r = link.set_ekf_source_set(3)
+    assert not r.ok and r.result_name == "DENIED" and "DENIED" in r.detail
+
+
+def test_external_navigation_arguments_are_checked_before_sending(peer: Any, make_link) -> None:
+    link = make_link(f"tcp:127.0.0.1:{peer.port}")
+    assert _up(link)
+    before = len(peer.messages("VISION_POSITION_ESTIMATE"))
+    for result, name in (
+        (link.send_vision_position(0, 0, float("nan"), 0, 0, 0, time_usec=1), "down"),
+        (link.send_vision_position(0, 0, 0, 0, 0, 0, time_usec=-5), "time_usec"),
+        (link.send_vision_position(0, 0, 0, 0, 0, 0, time_usec=1, reset_counter=256), "reset"),
+        (link.send_vision_speed(float("inf"), 0, 0, time_usec=1), "vn"),
+        (link.set_ekf_source_set(4), "source_set"),
+        (link.set_ekf_source_set(True), "source_set"),  # type: ignore[arg-type]
+    ):
+        assert not result.ok and result.result_name == "INVALID_ARGUMENT", result
+        assert name in result.detail
+    assert link.get_param("WPNAV_SPEED") == pytest.approx(500.0)  # barrier
+    assert len(peer.messages("VISION_POSITION_ESTIMATE")) == before
+    assert not [m for m in peer.messages("COMMAND_LONG") if m.command == 42007]
+    assert link.vision_positions_sent == 0

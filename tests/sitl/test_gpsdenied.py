@@ -1,0 +1,40 @@
+"""The GPS-denied landing on genuine ArduCopter 4.5.6 SITL, as the station flies it.
+
+The station's external-navigation set-up (parameters, reboot), take-off on GPS, the
+``extnav`` mission with the camera rendered from SIM_STATE through the real pipeline on
+the vehicle's clock; GPS goes over the pad (SIM_GPS_DISABLE = 1). Touchdown against the
+simulator's truth (``bench.sitl_gpsdenied`` flies the same run, N times, for the bars).
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from bench.sitl_gpsdenied import fly_once
+from tests.sitl.support import requires_sitl
+
+pytestmark = [pytest.mark.sitl, requires_sitl]
+
+
+def test_gps_lost_over_the_pad_lands_on_vision():
+    run = fly_once(seed=1)
+    assert "error" not in run, run
+    assert run["outcome"] == "landed", run
+    assert "on vision navigation (ExternalNav)" in run["message"]
+    assert run["states"][-5:] == ["switch", "settle", "descend", "final", "landed"], run["states"]
+    assert run["touchdown_error_m"] < 0.20
+    assert run["gps_off_at_boot_s"] is not None and run["gps_fix_type_at_end"] <= 1
+    assert run["vision_positions_sent"] > 50
+    # ArduPilot never lost its position: no EKF variance, no EKF failsafe
+    assert not [t for t in run["texts"] if t.startswith(("EKF variance", "EKF Failsafe"))]
+
+
+def test_pad_lost_without_gps_lands_in_place_and_says_so():
+    run = fly_once(seed=2, pad_lost=True)
+    assert "error" not in run, run
+    assert run["outcome"] == "landed_in_place", run
+    assert "not a landing on the pad" in run["message"]
+    assert run["states"][-2:] == ["landing_in_place", "landed_in_place"], run["states"]
+    # no fly-away: it came down near where the pad was lost (dead-reckoning drift only)
+    assert run["drift_after_pad_lost_m"] < 3.0
+    assert run["touchdown_error_m"] < 3.5
