@@ -24,6 +24,8 @@ from pipeline.template import reference_pyramid
 H_CORNERS = 12
 RELIABLE_H_PX = 28.0  # an H this many pixels across is found in nearly every frame
 SEARCH_WIDTH_PX = 640  # frames are searched at most this wide (pipeline.frame)
+# OpenCV's warps (the frames' template check) take pictures under 32767 px a side.
+MAX_SIDE_PX = 16384
 _WORK_MAX = 1024  # pictures are measured at up to this many pixels a side
 _LEVELS = 9  # thresholds tried per channel between its 2nd and 98th percentiles
 _MIN_H_AREA = 0.002  # of the picture: smaller marks are text or noise, not the pad's H
@@ -168,6 +170,11 @@ class Reference:
         if not math.isfinite(pad_size_m) or pad_size_m <= 0:
             raise ValueError(f"pad_size_m must be a positive number of metres, got {pad_size_m}")
         h_img, w_img = image.shape[:2]
+        if max(h_img, w_img) > MAX_SIDE_PX:
+            raise ValueError(
+                f"the picture is {w_img}x{h_img} px: a reference picture may be at most "
+                f"{MAX_SIDE_PX} px on a side (shrink it; the pad needs far fewer)"
+            )
         scale = min(1.0, _WORK_MAX / max(h_img, w_img))
         work = image
         if scale < 1.0:

@@ -55,6 +55,13 @@ def test_a_large_photo_like_the_seeds(pad):
     assert ref.corners_px.max(axis=0)[0] > 1500  # reported in the photo's own pixels
 
 
+def test_a_picture_too_wide_for_the_warps_is_a_clear_error():
+    # 40 MP fits an upload's pixel budget, but not OpenCV's warps (under 32767 px a side)
+    strip = np.zeros((1000, 40000, 3), np.uint8)
+    with pytest.raises(ValueError, match="at most 16384 px on a side"):
+        Reference.from_image(strip, 0.55)
+
+
 def test_invariants_match_opencv(pad):
     ref = Reference.from_image(pad, 0.55)
     mask = np.zeros(pad.shape[:2], np.uint8)
