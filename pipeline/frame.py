@@ -3,7 +3,8 @@
 Where the pipeline looks: when the caller hands in the last result (``prior``),
 first a window around where the pad was, at a resolution where the H spans
 about ``TRACK_SPAN_PX``; when that finds nothing, the whole frame at a
-working width of ``SEARCH_WIDTH_PX``. Whatever finds the H (``pipeline.find``),
+working width of ``SEARCH_WIDTH_PX``, and a wider frame at its own resolution
+last (a far pad is too small at the working width). Whatever finds the H (``pipeline.find``),
 the pad is then measured at the frame's own resolution around it
 (``pipeline.measure``). The result says which way found it.
 """
@@ -111,6 +112,10 @@ def process_frame(
     tries.append(("search", search, method))
     if method == DEFAULT_METHOD:
         tries.append(("search", search, FALLBACK_METHOD))
+    if image.shape[1] > SEARCH_WIDTH_PX:
+        # A far pad on a wide frame: too small at the search's width, searched at the
+        # camera's own resolution before giving up (native frames buy range).
+        tries.append(("search", View.whole(image.shape, image.shape[1]), method))
     for way, view, how in tries:
         if view is None:
             continue
