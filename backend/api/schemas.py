@@ -147,6 +147,15 @@ class Telemetry(Model):
     attitude_rx_monotonic: float | None
     local_position_time_boot_ms: int | None
     local_position_rx_monotonic: float | None
+    vehicle_time_boot_ms: int | None = Field(
+        description="the vehicle's clock: time_boot_ms of its latest time-stamped message"
+    )
+    boots: int = Field(description="reboots seen (the vehicle's clock went back)")
+    heartbeats: int = Field(description="HEARTBEATs received from the vehicle")
+    statustexts_received: int
+    position_stale: bool = Field(
+        description="LOCAL_POSITION_NED stopped coming: position_ned is null until it returns"
+    )
     landing_targets_sent: int
     last_landing_target: LandingTargetSent | None
 

@@ -2205,6 +2205,11 @@ export interface components {
             /** Attitude Time Boot Ms */
             attitude_time_boot_ms: number | null;
             battery: components["schemas"]["Battery"] | null;
+            /**
+             * Boots
+             * @description reboots seen (the vehicle's clock went back)
+             */
+            boots: number;
             /** Crc Errors */
             crc_errors: number;
             ekf: components["schemas"]["EkfStatus"] | null;
@@ -2216,6 +2221,11 @@ export interface components {
             heading_deg: number | null;
             /** Heartbeat Age S */
             heartbeat_age_s: number | null;
+            /**
+             * Heartbeats
+             * @description HEARTBEATs received from the vehicle
+             */
+            heartbeats: number;
             /**
              * Implausible
              * @description messages dropped: their values cannot be real
@@ -2241,6 +2251,11 @@ export interface components {
             /** Packets Lost Pct */
             packets_lost_pct: number | null;
             position_ned: components["schemas"]["Vec3"] | null;
+            /**
+             * Position Stale
+             * @description LOCAL_POSITION_NED stopped coming: position_ned is null until it returns
+             */
+            position_stale: boolean;
             /** Prearm Ok */
             prearm_ok: boolean | null;
             /** Rangefinder M */
@@ -2256,10 +2271,17 @@ export interface components {
             state: "connecting" | "up" | "lost" | "closed";
             /** Statustexts */
             statustexts: components["schemas"]["StatusText"][];
+            /** Statustexts Received */
+            statustexts_received: number;
             /** System Status */
             system_status: number | null;
             /** Vehicle Sysid */
             vehicle_sysid: number | null;
+            /**
+             * Vehicle Time Boot Ms
+             * @description the vehicle's clock: time_boot_ms of its latest time-stamped message
+             */
+            vehicle_time_boot_ms: number | null;
             velocity_ned: components["schemas"]["Vec3"] | null;
         };
         /** TelemetryMessage */
@@ -2272,6 +2294,11 @@ export interface components {
             /** Attitude Time Boot Ms */
             attitude_time_boot_ms: number | null;
             battery: components["schemas"]["Battery"] | null;
+            /**
+             * Boots
+             * @description reboots seen (the vehicle's clock went back)
+             */
+            boots: number;
             /** Crc Errors */
             crc_errors: number;
             ekf: components["schemas"]["EkfStatus"] | null;
@@ -2283,6 +2310,11 @@ export interface components {
             heading_deg: number | null;
             /** Heartbeat Age S */
             heartbeat_age_s: number | null;
+            /**
+             * Heartbeats
+             * @description HEARTBEATs received from the vehicle
+             */
+            heartbeats: number;
             /**
              * Implausible
              * @description messages dropped: their values cannot be real
@@ -2308,6 +2340,11 @@ export interface components {
             /** Packets Lost Pct */
             packets_lost_pct: number | null;
             position_ned: components["schemas"]["Vec3"] | null;
+            /**
+             * Position Stale
+             * @description LOCAL_POSITION_NED stopped coming: position_ned is null until it returns
+             */
+            position_stale: boolean;
             /** Prearm Ok */
             prearm_ok: boolean | null;
             /** Rangefinder M */
@@ -2323,6 +2360,8 @@ export interface components {
             state: "connecting" | "up" | "lost" | "closed";
             /** Statustexts */
             statustexts: components["schemas"]["StatusText"][];
+            /** Statustexts Received */
+            statustexts_received: number;
             /** System Status */
             system_status: number | null;
             /**
@@ -2332,6 +2371,11 @@ export interface components {
             type: "telemetry";
             /** Vehicle Sysid */
             vehicle_sysid: number | null;
+            /**
+             * Vehicle Time Boot Ms
+             * @description the vehicle's clock: time_boot_ms of its latest time-stamped message
+             */
+            vehicle_time_boot_ms: number | null;
             velocity_ned: components["schemas"]["Vec3"] | null;
         };
         /** Touchdown */
