@@ -20,8 +20,8 @@ from backend.link.core import _BACKOFF_S, LinkCore
 from backend.link.plausibility import implausible
 from backend.link.state import LinkState
 from backend.link.telemetry import (
-    POSITION_STALE_MS,
     CLOCK_MESSAGES,
+    POSITION_STALE_MS,
     STATUSTEXT_HISTORY,
     TELEMETRY_HANDLERS,
     StatusText,
