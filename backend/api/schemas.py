@@ -153,6 +153,9 @@ class Telemetry(Model):
     boots: int = Field(description="reboots seen (the vehicle's clock went back)")
     heartbeats: int = Field(description="HEARTBEATs received from the vehicle")
     statustexts_received: int
+    state_confirmed: bool = Field(
+        description="a HEARTBEAT came after the latest accepted arm/disarm/mode command"
+    )
     position_stale: bool = Field(
         description="LOCAL_POSITION_NED stopped coming: position_ned is null until it returns"
     )

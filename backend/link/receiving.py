@@ -22,6 +22,7 @@ from backend.link.state import LinkState
 from backend.link.telemetry import (
     CLOCK_MESSAGES,
     POSITION_STALE_MS,
+    STATE_COMMANDS,
     STATUSTEXT_HISTORY,
     TELEMETRY_HANDLERS,
     StatusText,
@@ -157,6 +158,7 @@ class LinkReceiver(LinkCore):
         old = self._telemetry
         if msg.get_type() == "HEARTBEAT":
             changes["heartbeats"] = old.heartbeats + 1
+            changes["state_confirmed"] = True
         self._apply(changes)
         if msg.get_type() == "HEARTBEAT":
             new = self._telemetry
@@ -177,6 +179,9 @@ class LinkReceiver(LinkCore):
         )
 
     def _on_command_ack(self, msg: Any) -> None:
+        if msg.command in STATE_COMMANDS and msg.result == mavlink2.MAV_RESULT_ACCEPTED:
+            # whoever asked: the armed flag and mode are old until the next HEARTBEAT
+            self._apply({"state_confirmed": False})
         addressed = getattr(msg, "target_system", 0)
         if addressed not in (0, self._source_system):
             return  # an answer to another ground station

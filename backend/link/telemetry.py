@@ -170,6 +170,9 @@ class Telemetry:
     boots: int = 0
     heartbeats: int = 0
     statustexts_received: int = 0
+    #: A HEARTBEAT came after the latest accepted command that changes the armed state or
+    #: mode (ArduCopter's heartbeat is 1 Hz: until then ``armed``/``mode`` are the old ones).
+    state_confirmed: bool = False
     #: LOCAL_POSITION_NED stopped: ``position_ned`` and ``velocity_ned`` were dropped.
     position_stale: bool = False
     # what the GCS sent for precision landing (ArduPilot reports nothing back)
@@ -210,6 +213,17 @@ def _jsonable(value: Any) -> Any:
     return value
 
 
+#: Commands whose acceptance makes the HEARTBEAT's armed flag and mode out of date.
+STATE_COMMANDS = frozenset(
+    {
+        mavlink2.MAV_CMD_COMPONENT_ARM_DISARM,
+        mavlink2.MAV_CMD_DO_SET_MODE,
+        mavlink2.MAV_CMD_NAV_TAKEOFF,
+        mavlink2.MAV_CMD_NAV_LAND,
+        mavlink2.MAV_CMD_NAV_RETURN_TO_LAUNCH,
+    }
+)
+
 #: What the vehicle reported, forgotten when it reboots (the link's own figures, the
 #: texts and what the GCS sent stay).
 _VEHICLE_FIELDS = (
@@ -233,6 +247,7 @@ _VEHICLE_FIELDS = (
     "local_position_time_boot_ms",
     "local_position_rx_monotonic",
     "position_stale",
+    "state_confirmed",
 )
 _DEFAULTS = {f.name: f.default for f in fields(Telemetry)}
 

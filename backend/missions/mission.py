@@ -27,6 +27,9 @@ from pipeline import Camera, FrameResult
 LOITER_MIN_THROTTLE_PWM = 1400
 #: States after which a mission does nothing more.
 TERMINAL = ("landed", "completed", "aborted", "failed", "link_lost")
+#: How long (mission clock) a HEARTBEAT may take to confirm an accepted command's effect
+#: (ArduCopter sends one a second).
+CONFIRM_S = 3.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -170,6 +173,15 @@ class Mission:
                 "link_lost",
                 f"link {tel.state}: left to the vehicle's own failsafe; Visland sends nothing",
             )
+            return
+        if self.state == "start" and not getattr(tel, "state_confirmed", True):
+            # An arm, disarm or mode change was accepted and no HEARTBEAT has come since:
+            # the armed flag and mode in hand are the old ones. Decide on the next one.
+            if now - self.state_since > CONFIRM_S:
+                self._fail(
+                    f"no HEARTBEAT from the vehicle for {CONFIRM_S:g} s after it accepted a "
+                    "command: its armed state and mode are not known"
+                )
             return
         self._seen_armed = self._seen_armed or tel.armed
         if now - self.started > self.config.timeout_s:

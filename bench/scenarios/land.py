@@ -179,6 +179,19 @@ class LockstepDriver:
                 raise RuntimeError("the stand-in reported no position")
             self.advance(0.05)
 
+    def await_reboot(self, boots: int) -> None:
+        """Let the stand-in's reboot silence pass (no barrier: a rebooting vehicle answers
+        nothing; a fixed span of simulated time keeps runs deterministic), then check
+        that the link has seen the new boot."""
+        from sim.vehicle.mavlink_server import REBOOT_SILENCE_S
+
+        end = self.sim.time_s + REBOOT_SILENCE_S + 0.5
+        while self.sim.time_s < end:
+            self.server.advance(0.05)
+        self.link.sync()
+        if not self.raw.wait_until(lambda t: t.boots > boots, 5.0):
+            raise RuntimeError("set-up: the link did not see the stand-in's reboot")
+
     def now(self) -> float:
         return self.sim.time_s
 
@@ -220,12 +233,13 @@ class RealtimeDriver:
         self._next = time.monotonic()
 
     def connect(self, timeout_s: float = 30.0) -> None:
-        ok = self.raw.wait_until(
-            lambda t: t.state == LinkState.UP and t.position_ned is not None, timeout=timeout_s
-        )
-        if not ok:
-            raise RuntimeError(f"no vehicle with a position estimate at {self.raw.url}")
+        if not self.raw.wait_until(lambda t: t.state == LinkState.UP, timeout=timeout_s):
+            raise RuntimeError(f"no vehicle at {self.raw.url}")
         self._next = time.monotonic()
+
+    def await_reboot(self, boots: int) -> None:
+        if not self.raw.wait_until(lambda t: t.boots > boots and t.state == LinkState.UP, 60.0):
+            raise RuntimeError("set-up: the vehicle did not come back from its reboot")
 
     def now(self) -> float:
         return time.monotonic()
@@ -260,28 +274,67 @@ def _wait(driver: Any, dt: float, until: Any, limit_s: float, what: str) -> None
         driver.advance(dt)
 
 
+#: What the runner writes for ArduCopter's precision landing (then reboots: PLND_TYPE
+#: is read at boot).
+PLND_SETUP = (("PLND_ENABLED", 1.0), ("PLND_TYPE", 1.0), ("PLND_EST_TYPE", 1.0))
+#: Vehicle seconds to wait for a position estimate (ArduCopter: ~41 s after a boot).
+READY_LIMIT_S = 120.0
+#: Vehicle seconds for a HEARTBEAT to confirm an accepted command (one a second).
+CONFIRM_LIMIT_S = 5.0
+
+
+def set_up_precland(driver: Any) -> None:
+    """Write :data:`PLND_SETUP`, reboot, and wait until the link has seen the new boot."""
+    link = driver.link
+    for name, value in PLND_SETUP:
+        if link.get_param(name) != value:
+            result = link.set_param(name, value)
+            if not result.ok:
+                raise RuntimeError(f"set-up: could not set {name}: {result.detail}")
+    # The link sees a reboot as the vehicle's clock going back: a vehicle younger than
+    # its reboot takes (the stand-in in lockstep) would not show one.
+    _wait(driver, 0.1, lambda t: (t.vehicle_time_boot_ms or 0) > 5000, 30, "5 s of boot")
+    boots = link.telemetry.boots
+    result = link.reboot()
+    if not result.ok:
+        raise RuntimeError(f"set-up: reboot refused: {result.detail}")
+    driver.await_reboot(boots)
+
+
+def _confirmed_guided(driver: Any) -> None:
+    """GUIDED, as a HEARTBEAT after the ACK says (ArduCopter undoes a mode set while it
+    boots; a few tries)."""
+    link = driver.link
+    for _ in range(3):
+        result = link.set_mode("GUIDED")
+        if not result.ok:
+            raise RuntimeError(f"set-up: GUIDED refused: {result.detail}")
+        _wait(driver, 0.05, lambda t: t.state_confirmed, CONFIRM_LIMIT_S, "GUIDED (heartbeat)")
+        if link.telemetry.mode == "GUIDED":
+            return
+    raise RuntimeError(f"set-up: GUIDED accepted, the heartbeat says {link.telemetry.mode}")
+
+
 def fly_to_start(driver: Any, spec: RunSpec, *, precland: bool | None = None) -> None:
-    """Take off and fly to the run's start; for ``plnd`` runs (or ``precland``) turn on
-    precision landing first (PLND_TYPE needs a reboot: done on the stand-in)."""
+    """Take off and fly to the run's start; for ``plnd`` runs (or ``precland``) set up
+    precision landing first (parameters, reboot). Waits on the vehicle's own readiness
+    (its position estimate) and confirms GUIDED and arming by a heartbeat each."""
     link = driver.link
     if precland if precland is not None else spec.strategy == "plnd":
-        for name in ("PLND_ENABLED", "PLND_TYPE"):
-            if link.get_param(name) != 1 and not link.set_param(name, 1).ok:
-                raise RuntimeError(f"set-up: could not set {name}")
-        if driver.deterministic:  # PLND_TYPE is read at boot
-            if not link.reboot().ok:
-                raise RuntimeError("set-up: reboot refused")
-            driver.advance(0.5)
-    _wait(driver, 0.1, lambda t: t.position_ned is not None, 30, "position estimate")
-    if not link.set_mode("GUIDED").ok:
-        raise RuntimeError("set-up: GUIDED refused")
+        set_up_precland(driver)
+    _wait(driver, 0.1, lambda t: t.position_ready, READY_LIMIT_S, "position estimate")
+    _confirmed_guided(driver)
     t0 = driver.now()
-    while not link.arm().ok:
+    while not (result := link.arm()).ok:
         if driver.now() - t0 > 30:
-            raise RuntimeError("set-up: the vehicle would not arm")
+            raise RuntimeError(f"set-up: the vehicle would not arm: {result.detail}")
         driver.advance(0.5)
-    if not link.takeoff(spec.start_alt_m).ok:
-        raise RuntimeError("set-up: take-off refused")
+    _wait(driver, 0.05, lambda t: t.state_confirmed, CONFIRM_LIMIT_S, "arming (heartbeat)")
+    tel = link.telemetry
+    if not tel.armed or tel.mode != "GUIDED":
+        raise RuntimeError(f"set-up: after arming the heartbeat says {tel.mode}, armed={tel.armed}")
+    if not (result := link.takeoff(spec.start_alt_m)).ok:
+        raise RuntimeError(f"set-up: take-off refused: {result.detail}")
     _wait(
         driver,
         0.1,

@@ -2269,6 +2269,11 @@ export interface components {
              * @enum {string}
              */
             state: "connecting" | "up" | "lost" | "closed";
+            /**
+             * State Confirmed
+             * @description a HEARTBEAT came after the latest accepted arm/disarm/mode command
+             */
+            state_confirmed: boolean;
             /** Statustexts */
             statustexts: components["schemas"]["StatusText"][];
             /** Statustexts Received */
@@ -2358,6 +2363,11 @@ export interface components {
              * @enum {string}
              */
             state: "connecting" | "up" | "lost" | "closed";
+            /**
+             * State Confirmed
+             * @description a HEARTBEAT came after the latest accepted arm/disarm/mode command
+             */
+            state_confirmed: boolean;
             /** Statustexts */
             statustexts: components["schemas"]["StatusText"][];
             /** Statustexts Received */
