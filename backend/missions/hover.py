@@ -4,8 +4,8 @@ States: ``start`` -> ``preflight`` (unless already flying: wait for the vehicle'
 position estimate, then GUIDED, arm and take off to ``altitude_m``, each confirmed by a
 HEARTBEAT that came after the vehicle accepted it) -> ``takeoff`` -> ``transit`` (fly to
 where the pad should be) -> ``hold`` (``hold_s`` while frames are acquired and recorded;
-once the pad is seen, centre and turn over it by vision) -> ``completed`` (left hovering in GUIDED). Link loss and operator abort as in
-every mission.
+once the pad is seen, centre and turn over it by vision) -> ``completed`` (left hovering
+in GUIDED). Link loss and operator abort as in every mission.
 """
 
 from __future__ import annotations
