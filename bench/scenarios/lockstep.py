@@ -31,7 +31,7 @@ class LockstepError(RuntimeError):
 class LockstepLink:
     """Wraps ``link`` (started, connected to ``server``) for use from the clock's thread.
 
-    Exposes what missions use: ``telemetry``, ``set_mode``, ``arm``, ``takeoff``,
+    Exposes what missions use: ``telemetry``, ``set_mode``, ``arm``, ``disarm``, ``takeoff``,
     ``goto_local_ned``, ``set_velocity_ned``, ``send_landing_target``, ``get_param``,
     ``set_param``, ``reboot``.
     """
@@ -93,6 +93,9 @@ class LockstepLink:
 
     def arm(self) -> CommandResult:
         return self.pump(self.link.arm)
+
+    def disarm(self) -> CommandResult:
+        return self.pump(self.link.disarm)
 
     def takeoff(self, altitude_m: float) -> CommandResult:
         return self.pump(self.link.takeoff, altitude_m)
