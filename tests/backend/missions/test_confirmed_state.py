@@ -102,7 +102,7 @@ def _run(link: VehicleLink, wall_limit_s: float = 20.0) -> HoverMission:
     end = time.monotonic() + wall_limit_s
     while mission.state not in ("takeoff", "failed") and time.monotonic() < end:
         beats = link.telemetry.heartbeats
-        link.wait_until(lambda t: t.heartbeats > beats, 1.0)  # a tick per heartbeat (10 Hz)
+        link.wait_until(lambda t, n=beats: t.heartbeats > n, 1.0)  # a tick per heartbeat
         mission.step(time.monotonic())
     return mission
 
