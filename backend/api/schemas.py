@@ -215,6 +215,14 @@ class Touchdown(Model):
     source: Literal["truth", "telemetry"]
 
 
+PrecLandVerdict = Literal["accepted", "failsafe", "silent"]
+_PRECLAND_DOC = (
+    "plnd runs: did ArduCopter take the targets? accepted ('PrecLand: Target Found' / "
+    "'Init Complete'), failsafe ('PrecLand: Failsafe Measures': no backend), silent (said "
+    "nothing). A plnd landing that is not accepted ends 'landed_blind'."
+)
+
+
 class MissionSnapshot(Model):
     """A mission's live state (the precision-landing panel)."""
 
@@ -233,6 +241,7 @@ class MissionSnapshot(Model):
     fix: PadFix | None
     image_size: tuple[int, int] | None
     touchdown: Touchdown | None
+    precland: PrecLandVerdict | None = Field(default=None, description=_PRECLAND_DOC)
     run_id: int | None
     stored: bool
 
@@ -279,6 +288,10 @@ class MissionRecord(Model):
     detections: int = 0
     notes: list[str] = Field(default_factory=list)
     touchdown: Touchdown | None = None
+    precland: PrecLandVerdict | None = Field(default=None, description=_PRECLAND_DOC)
+    precland_texts: list[str] = Field(
+        default_factory=list, description="ArduCopter's 'PrecLand: ...' texts during the run"
+    )
     outcome: str | None = None
     message: str = ""
     duration_s: float | None = None

@@ -40,6 +40,10 @@ FINAL_SINK_MPS = 0.3
 FINAL_SPEED_MPS = 0.3
 TOUCHDOWN_M = 0.1
 FINAL_GUIDED_S = 10.0
+#: ArduCopter's own precision-landing announcements (AC_PrecLand): the only proof that it
+#: takes the targets; "Failsafe Measures" without them means it has no backend.
+PRECLAND_ACCEPTED = ("PrecLand: Target Found", "PrecLand: Init Complete")
+PRECLAND_FAILSAFE = "PrecLand: Failsafe Measures"
 
 
 class LandMission(Mission):
@@ -53,6 +57,30 @@ class LandMission(Mission):
         self._last_goto = -math.inf
         self._search_alt: float | None = None
         self._land_accepted = False
+        self._texts_mark: int | None = None
+        if config.strategy == "plnd":
+            self.record.precland = "silent"
+
+    def step(self, now: float, sample: Any = None) -> None:
+        if self.config.strategy == "plnd" and not self.done:
+            self._hear_precland(self.link.telemetry)
+        super().step(now, sample)
+
+    def _hear_precland(self, tel: Telemetry) -> None:
+        """Note ArduCopter's "PrecLand: ..." texts since the mission started."""
+        count = getattr(tel, "statustexts_received", 0)
+        if self._texts_mark is None:
+            self._texts_mark = count  # what came before this run says nothing about it
+        new = min(count - self._texts_mark, len(tel.statustexts))
+        self._texts_mark = count
+        for entry in tel.statustexts[len(tel.statustexts) - new :] if new > 0 else ():
+            if not entry.text.startswith("PrecLand"):
+                continue
+            self.record.precland_texts.append(entry.text)
+            if entry.text in PRECLAND_ACCEPTED:
+                self.record.precland = "accepted"
+            elif entry.text == PRECLAND_FAILSAFE and self.record.precland != "accepted":
+                self.record.precland = "failsafe"
 
     # --- states -----------------------------------------------------------------------------
     def _s_start(self, now: float, tel: Telemetry) -> None:
@@ -299,11 +327,24 @@ class LandMission(Mission):
     def _landed(self, tel: Telemetry) -> None:
         touchdown = self._touchdown(tel)
         self.record.touchdown = touchdown
+        outcome, lead = "landed", "landed"
+        verdict = self.record.precland
+        if verdict is not None and verdict != "accepted":
+            outcome = "landed_blind"
+            said = (
+                f"it said '{PRECLAND_FAILSAFE}': no precision-landing backend, set PLND_TYPE 1 "
+                "and reboot"
+                if verdict == "failsafe"
+                else "it never said 'PrecLand: Target Found'"
+            )
+            lead = (
+                f"landed blind, not a precision landing: ArduCopter ignored the targets ({said});"
+            )
         if touchdown is None:
-            self._end("landed", "landed and disarmed (no position to measure the error)")
+            self._end(outcome, f"{lead} disarmed (no position to measure the error)")
         else:
             self._end(
-                "landed",
-                f"landed {touchdown.error_m * 100:.1f} cm from the pad centre, heading off "
+                outcome,
+                f"{lead} {touchdown.error_m * 100:.1f} cm from the pad centre, heading off "
                 f"by {touchdown.heading_error_deg:.1f} deg ({touchdown.source})",
             )

@@ -26,7 +26,7 @@ from pipeline import Camera, FrameResult
 #: Below this RC throttle (us) LOITER would descend: no pilot, or the stick is down.
 LOITER_MIN_THROTTLE_PWM = 1400
 #: States after which a mission does nothing more.
-TERMINAL = ("landed", "completed", "aborted", "failed", "link_lost")
+TERMINAL = ("landed", "landed_blind", "completed", "aborted", "failed", "link_lost")
 #: How long (mission clock) a HEARTBEAT may take to confirm an accepted command's effect
 #: (ArduCopter sends one a second).
 CONFIRM_S = 3.0
@@ -211,6 +211,7 @@ class Mission:
             "fix": None if fix is None else _jsonable(fix.to_dict()),
             "image_size": None if sample is None else [sample.camera.width, sample.camera.height],
             "touchdown": None if self.record.touchdown is None else self.record.touchdown.to_dict(),
+            "precland": self.record.precland,
         }
 
     # --- inside -----------------------------------------------------------------------------

@@ -99,6 +99,11 @@ class RunResult:
     wall_s: float
     states: list[dict[str, Any]] = field(default_factory=list)
     record: RunRecord | None = None
+    #: "plnd": did ArduCopter take the targets (the record's verdict); None for "guided".
+    precland: str | None = None
+    precland_texts: list[str] = field(default_factory=list)
+    #: Where the touchdown was measured: "truth" (the simulator's) or "telemetry".
+    touchdown_source: str | None = None
 
     @property
     def success(self) -> bool:
@@ -120,6 +125,9 @@ class RunResult:
             "frames": self.frames,
             "detections": self.detections,
             "wall_s": round(self.wall_s, 2),
+            "precland": self.precland,
+            "precland_texts": self.precland_texts,
+            "touchdown_source": self.touchdown_source,
             "spec": self.spec.__dict__,
         }
 
@@ -324,6 +332,9 @@ def fly_to_start(driver: Any, spec: RunSpec, *, precland: bool | None = None) ->
     if precland if precland is not None else spec.strategy == "plnd":
         set_up_precland(driver)
     _wait(driver, 0.1, lambda t: t.position_ready, READY_LIMIT_S, "position estimate")
+    on_ready = getattr(driver, "on_ready", None)
+    if on_ready is not None:
+        on_ready()
     _confirmed_guided(driver)
     t0 = driver.now()
     while not (result := link.arm()).ok:
@@ -360,11 +371,13 @@ def fly_to_start(driver: Any, spec: RunSpec, *, precland: bool | None = None) ->
             raise RuntimeError("set-up: did not reach the start")
 
 
-def camera_config(spec: RunSpec) -> SimCameraConfig:
-    """The simulated camera of a run: the pad where the stand-in has it, the run's SNR."""
+def camera_config(spec: RunSpec, *, pad_down_m: float = 0.0) -> SimCameraConfig:
+    """The simulated camera of a run: the pad where the stand-in has it (on the ground at
+    ``pad_down_m``, true NED), the run's SNR."""
     return SimCameraConfig(
         pad_north_m=PAD_NE[0],
         pad_east_m=PAD_NE[1],
+        pad_down_m=pad_down_m,
         pad_heading_deg=spec.pad_heading_deg,
         pad_size_m=PAD_SIZE_M,
         snr_db=spec.snr_db,
@@ -440,26 +453,37 @@ def run_one(
     config_overrides: dict[str, Any] | None = None,
     hide_pad: Callable[[Any, Mission], bool] | None = None,
     after_step: Callable[[Any, Mission], None] | None = None,
+    driver: Any = None,
 ) -> RunResult:
-    """Fly one landing run (take off, reach the start, land by vision) and measure it."""
+    """Fly one landing run (take off, reach the start, land by vision) and measure it.
+
+    The vehicle: ``driver`` (e.g. a :class:`~bench.scenarios.observed.SitlDriver`, closed
+    here), else the vehicle at ``url`` in real time, else the stand-in in lockstep.
+    """
     wall0 = time.perf_counter()
-    driver: Any = RealtimeDriver(url) if url else LockstepDriver(spec)
+    if driver is None:
+        driver = RealtimeDriver(url) if url else LockstepDriver(spec)
     try:
         driver.connect()
         fly_to_start(driver, spec)
+        begin = getattr(driver, "begin_landing", None)
+        if begin is not None:
+            begin()
+        overrides = dict(config_overrides or {})
+        overrides.setdefault("pad_down_m", getattr(driver, "ground_ekf_d", 0.0))
         config = LandConfig(
             strategy=spec.strategy,
             pad_north_m=PAD_NE[0],
             pad_east_m=PAD_NE[1],
             pad_heading_deg=spec.pad_heading_deg,
-            **(config_overrides or {}),
+            **overrides,
         )
         start = driver.now()
         mission = LandMission(driver.link, config, now=start, touchdown_truth=driver.touchdown)
         fly(
             driver,
             mission,
-            camera_config(spec),
+            camera_config(spec, pad_down_m=getattr(driver, "ground_true_d", 0.0)),
             camera_hz=camera_hz,
             hide_pad=hide_pad,
             after_step=after_step,
@@ -478,6 +502,9 @@ def run_one(
             wall_s=time.perf_counter() - wall0,
             states=rec.states,
             record=rec,
+            precland=rec.precland,
+            precland_texts=list(rec.precland_texts),
+            touchdown_source=None if td is None else td.source,
         )
     finally:
         driver.close()

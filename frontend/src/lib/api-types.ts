@@ -1470,6 +1470,16 @@ export interface components {
             notes?: string[];
             /** Outcome */
             outcome?: string | null;
+            /**
+             * Precland
+             * @description plnd runs: did ArduCopter take the targets? accepted ('PrecLand: Target Found' / 'Init Complete'), failsafe ('PrecLand: Failsafe Measures': no backend), silent (said nothing). A plnd landing that is not accepted ends 'landed_blind'.
+             */
+            precland?: ("accepted" | "failsafe" | "silent") | null;
+            /**
+             * Precland Texts
+             * @description ArduCopter's 'PrecLand: ...' texts during the run
+             */
+            precland_texts?: string[];
             /** States */
             states?: components["schemas"]["StateChange"][];
             /** Strategy */
@@ -1554,6 +1564,11 @@ export interface components {
             outcome: string | null;
             /** Pad Seen Age S */
             pad_seen_age_s: number | null;
+            /**
+             * Precland
+             * @description plnd runs: did ArduCopter take the targets? accepted ('PrecLand: Target Found' / 'Init Complete'), failsafe ('PrecLand: Failsafe Measures': no backend), silent (said nothing). A plnd landing that is not accepted ends 'landed_blind'.
+             */
+            precland?: ("accepted" | "failsafe" | "silent") | null;
             /** Run Id */
             run_id: number | null;
             /** State */
