@@ -204,6 +204,12 @@ class LinkCommands(LinkCore):
             return None
         return None if got is None else got[0]
 
+    def written_since_boot(self, names: tuple[str, ...]) -> list[str]:
+        """Those of ``names`` this link wrote since the vehicle's latest boot it saw:
+        settings read at boot (PLND_TYPE, VISO_TYPE) do not act before a reboot."""
+        boots = self._telemetry.boots
+        return [n for n in names if self._written_in_boot.get(n) == boots]
+
     def request_param_list(self) -> CommandResult:
         """Ask for every parameter (PARAM_REQUEST_LIST); they arrive as PARAM_VALUEs.
 
@@ -253,6 +259,7 @@ class LinkCommands(LinkCore):
         echoed = got[0]
         expected = cmd.as_float32(fvalue)
         if math.isclose(echoed, expected, rel_tol=1e-6, abs_tol=1e-9):
+            self._written_in_boot[name] = self._telemetry.boots
             return self._finish(
                 CommandResult(True, label, None, "ACCEPTED", (), f"{name} = {echoed:g}", elapsed)
             )

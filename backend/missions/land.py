@@ -114,6 +114,14 @@ class LandMission(Mission):
         if wrong:
             self._fail("precision landing is off: set " + " and ".join(wrong))
             return False
+        since = getattr(self.link, "written_since_boot", None)
+        pending = since(("PLND_ENABLED", "PLND_TYPE")) if since is not None else []
+        if pending:
+            self._fail(
+                f"{' and '.join(pending)} changed since the autopilot booted: ArduCopter reads "
+                "them at boot, reboot it before a precision landing"
+            )
+            return False
         offset = self.config.mount.offset_m
         for axis, value in zip("XYZ", offset, strict=True):
             got = self.link.get_param(f"PLND_CAM_POS_{axis}")

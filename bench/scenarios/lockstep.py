@@ -109,6 +109,9 @@ class LockstepLink:
     def set_param(self, name: str, value: float) -> CommandResult:
         return self.pump(self.link.set_param, name, value)
 
+    def written_since_boot(self, names: tuple[str, ...]) -> list[str]:
+        return self.link.written_since_boot(names)
+
     # --- not acknowledged: sent at once, handled at the next sync -------------------------------
     def goto_local_ned(self, *args: Any, **kwargs: Any) -> CommandResult:
         return self.link.goto_local_ned(*args, **kwargs)
