@@ -5,8 +5,8 @@ station cannot know about; its own writes it refuses to land on until a reboot):
 ArduCopter has no precision-landing backend ("PrecLand: Failsafe Measures", a 7 s hold,
 then a plain descent where it is). The land mission flies its "plnd" strategy over the
 real link with the camera rendered from the simulator's truth, and must report a blind
-landing, never a precision-landing success. Then the same with the reboot: ArduCopter announces the targets and the run
-is a precision landing. Each vehicle is fresh.
+landing, never a precision-landing success. Then the same with the reboot: ArduCopter
+announces the targets and the run is a precision landing. Each vehicle is fresh.
 """
 
 from __future__ import annotations
