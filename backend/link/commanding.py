@@ -65,6 +65,19 @@ class LinkCommands(LinkCore):
             "takeoff", mavlink2.MAV_CMD_NAV_TAKEOFF, (0, 0, 0, math.nan, 0, 0, alt)
         )
 
+    def set_yaw(self, heading_deg: float, *, rate_dps: float = 0.0) -> CommandResult:
+        """Turn to ``heading_deg`` (absolute, clockwise from north) the shortest way
+        (MAV_CMD_CONDITION_YAW; ArduCopter takes it in GUIDED, AUTO and LAND), at
+        ``rate_dps`` (0: its default)."""
+        try:
+            heading = cmd.finite(heading_deg, "heading_deg") % 360.0
+            rate = cmd.finite(rate_dps, "rate_dps")
+            if rate < 0:
+                raise ValueError(f"rate_dps must be >= 0, got {rate_dps!r}")
+        except ValueError as exc:
+            return self._invalid("set_yaw", exc)
+        return self._command_long("set_yaw", mavlink2.MAV_CMD_CONDITION_YAW, (heading, rate, 0, 0))
+
     def land(self) -> CommandResult:
         """Land where the vehicle is (MAV_CMD_NAV_LAND: ArduCopter switches to LAND)."""
         return self._command_long("land", mavlink2.MAV_CMD_NAV_LAND, (0, 0, 0, math.nan, 0, 0, 0))

@@ -44,6 +44,10 @@ FINAL_GUIDED_S = 10.0
 #: takes the targets; "Failsafe Measures" without them means it has no backend.
 PRECLAND_ACCEPTED = ("PrecLand: Target Found", "PrecLand: Init Complete")
 PRECLAND_FAILSAFE = "PrecLand: Failsafe Measures"
+#: plnd: ArduCopter's precision landing steers the position only; in LAND it holds a fixed
+#: yaw given by MAV_CMD_CONDITION_YAW, sent when the pad's heading is off by more than this
+#: (deg), at most once per RESEND_S.
+YAW_FIX_DEG = 0.5
 
 
 class LandMission(Mission):
@@ -58,6 +62,7 @@ class LandMission(Mission):
         self._search_alt: float | None = None
         self._land_accepted = False
         self._texts_mark: int | None = None
+        self._last_yaw = -math.inf
         if config.strategy == "plnd":
             self.record.precland = "silent"
 
@@ -184,6 +189,7 @@ class LandMission(Mission):
         fix = self._take_new_fix()
         if fix is not None:
             self._send_landing_target(fix)
+            self._turn_to_pad(fix, tel)
             return
         height = self._height(tel)
         unseen = self._unseen_s()
@@ -316,6 +322,20 @@ class LandMission(Mission):
         if result.ok:
             self.record.target(self.now, "landing_target", x, y, z, fix.distance_m, fix.time_usec)
             self.last_target_t = self.now
+
+    def _turn_to_pad(self, fix: Any, tel: Telemetry) -> None:
+        """LAND holds the heading it had: turn it to the pad's, as seen."""
+        if abs(fix.heading_error_deg) < YAW_FIX_DEG or tel.attitude is None:
+            return
+        if self.now - self._last_yaw < RESEND_S or not hasattr(self.link, "set_yaw"):
+            return
+        self._last_yaw = self.now
+        heading = math.degrees(tel.attitude.yaw) - fix.heading_error_deg
+        result = self.link.set_yaw(heading, rate_dps=10.0)
+        if not result.ok:
+            note = f"the vehicle refused to turn to the pad in LAND: {result.detail}"
+            if note not in self.record.notes:
+                self.record.notes.append(note)
 
     def _send_predicted_target(self, tel: Telemetry) -> None:
         target = self._predicted_target(tel)

@@ -100,6 +100,9 @@ class LockstepLink:
     def takeoff(self, altitude_m: float) -> CommandResult:
         return self.pump(self.link.takeoff, altitude_m)
 
+    def set_yaw(self, heading_deg: float, **kwargs: Any) -> CommandResult:
+        return self.pump(self.link.set_yaw, heading_deg, **kwargs)
+
     def reboot(self) -> CommandResult:
         return self.pump(self.link.reboot)
 

@@ -435,8 +435,9 @@ class SimVehicle(FlightModes):
     def condition_yaw(
         self, angle_deg: float, rate_dps: float, direction: int, relative: bool
     ) -> int:
-        """MAV_CMD_CONDITION_YAW in GUIDED."""
-        if self.mode != GUIDED or not self.armed:
+        """MAV_CMD_CONDITION_YAW in GUIDED and in LAND (ArduCopter's LAND follows a
+        fixed yaw too; a mode change forgets it)."""
+        if self.mode not in (GUIDED, LAND) or not self.armed:
             return FAILED
         if not math.isfinite(angle_deg):
             return FAILED

@@ -9,6 +9,7 @@ from __future__ import annotations
 import os
 import random
 import threading
+import math
 import time
 from typing import Any
 
@@ -578,3 +579,14 @@ def test_statustexts_and_heartbeats_are_counted(peer: Any, make_link) -> None:
     t = link.telemetry
     assert len(t.statustexts) == 50 and t.statustexts[-1].text == "text 59"
     assert t.heartbeats >= 1
+
+
+def test_set_yaw_sends_condition_yaw_absolute_shortest_way(peer: Any, make_link) -> None:
+    link = make_link(f"tcp:127.0.0.1:{peer.port}")
+    assert _up(link)
+    result = link.set_yaw(-30.0, rate_dps=10.0)
+    assert result.ok, result.detail
+    sent = peer.wait_for("COMMAND_LONG", 3.0, lambda m: m.command == mavlink2.MAV_CMD_CONDITION_YAW)
+    assert (sent.param1, sent.param2, sent.param3, sent.param4) == (330.0, 10.0, 0.0, 0.0)
+    assert link.set_yaw(10.0, rate_dps=-1).result_name == "INVALID_ARGUMENT"
+    assert link.set_yaw(math.nan).result_name == "INVALID_ARGUMENT"
