@@ -6,10 +6,10 @@ silent, drop the connection, send garbage) and checks what the link makes of it.
 
 from __future__ import annotations
 
+import math
 import os
 import random
 import threading
-import math
 import time
 from typing import Any
 
