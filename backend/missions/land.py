@@ -66,13 +66,10 @@ class LandMission(Mission):
         if config.strategy == "plnd":
             self.record.precland = "silent"
 
-    def step(self, now: float, sample: Any = None) -> None:
-        if self.config.strategy == "plnd" and not self.done:
-            self._hear_precland(self.link.telemetry)
-        super().step(now, sample)
-
-    def _hear_precland(self, tel: Telemetry) -> None:
+    def _observe(self, tel: Telemetry) -> None:
         """Note ArduCopter's "PrecLand: ..." texts since the mission started."""
+        if self.config.strategy != "plnd":
+            return
         count = getattr(tel, "statustexts_received", 0)
         if self._texts_mark is None:
             self._texts_mark = count  # what came before this run says nothing about it

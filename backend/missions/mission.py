@@ -157,6 +157,7 @@ class Mission:
             raise ValueError(f"now must be finite and not before {self.now}, got {now!r}")
         self.now = now
         tel = self.link.telemetry
+        self._observe(tel)
         if sample is not None:
             self._take(sample, tel)
         with self._abort_lock:
@@ -215,6 +216,9 @@ class Mission:
         }
 
     # --- inside -----------------------------------------------------------------------------
+    def _observe(self, tel: Telemetry) -> None:
+        """Every step, before anything else: what a mission notes from the telemetry."""
+
     def _set_state(self, name: str, reason: str = "") -> None:
         if name == self.state:
             return
