@@ -455,7 +455,7 @@ class VehicleServer:
                 return FAILED
             # Ack first: a real autopilot acks, then goes quiet while it reboots.
             self._ack(msg, command, ACCEPTED)
-            sim.reboot()
+            sim.reboot(REBOOT_SILENCE_S)
             self._home_sent = None
             self._silent_until = sim.time_s + REBOOT_SILENCE_S
             return None
