@@ -147,6 +147,18 @@ class Telemetry(Model):
     attitude_rx_monotonic: float | None
     local_position_time_boot_ms: int | None
     local_position_rx_monotonic: float | None
+    vehicle_time_boot_ms: int | None = Field(
+        description="the vehicle's clock: time_boot_ms of its latest time-stamped message"
+    )
+    boots: int = Field(description="reboots seen (the vehicle's clock went back)")
+    heartbeats: int = Field(description="HEARTBEATs received from the vehicle")
+    statustexts_received: int
+    state_confirmed: bool = Field(
+        description="a HEARTBEAT came after the latest accepted arm/disarm/mode command"
+    )
+    position_stale: bool = Field(
+        description="LOCAL_POSITION_NED stopped coming: position_ned is null until it returns"
+    )
     landing_targets_sent: int
     last_landing_target: LandingTargetSent | None
 
@@ -203,6 +215,14 @@ class Touchdown(Model):
     source: Literal["truth", "telemetry"]
 
 
+PrecLandVerdict = Literal["accepted", "failsafe", "silent"]
+_PRECLAND_DOC = (
+    "plnd runs: did ArduCopter take the targets? accepted ('PrecLand: Target Found' / "
+    "'Init Complete'), failsafe ('PrecLand: Failsafe Measures': no backend), silent (said "
+    "nothing). A plnd landing that is not accepted ends 'landed_blind'."
+)
+
+
 class MissionSnapshot(Model):
     """A mission's live state (the precision-landing panel)."""
 
@@ -221,6 +241,7 @@ class MissionSnapshot(Model):
     fix: PadFix | None
     image_size: tuple[int, int] | None
     touchdown: Touchdown | None
+    precland: PrecLandVerdict | None = Field(default=None, description=_PRECLAND_DOC)
     run_id: int | None
     stored: bool
 
@@ -267,6 +288,10 @@ class MissionRecord(Model):
     detections: int = 0
     notes: list[str] = Field(default_factory=list)
     touchdown: Touchdown | None = None
+    precland: PrecLandVerdict | None = Field(default=None, description=_PRECLAND_DOC)
+    precland_texts: list[str] = Field(
+        default_factory=list, description="ArduCopter's 'PrecLand: ...' texts during the run"
+    )
     outcome: str | None = None
     message: str = ""
     duration_s: float | None = None

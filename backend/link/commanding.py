@@ -69,6 +69,19 @@ class LinkCommands(LinkCore):
             "takeoff", mavlink2.MAV_CMD_NAV_TAKEOFF, (0, 0, 0, math.nan, 0, 0, alt)
         )
 
+    def set_yaw(self, heading_deg: float, *, rate_dps: float = 0.0) -> CommandResult:
+        """Turn to ``heading_deg`` (absolute, clockwise from north) the shortest way
+        (MAV_CMD_CONDITION_YAW; ArduCopter takes it in GUIDED, AUTO and LAND), at
+        ``rate_dps`` (0: its default)."""
+        try:
+            heading = cmd.finite(heading_deg, "heading_deg") % 360.0
+            rate = cmd.finite(rate_dps, "rate_dps")
+            if rate < 0:
+                raise ValueError(f"rate_dps must be >= 0, got {rate_dps!r}")
+        except ValueError as exc:
+            return self._invalid("set_yaw", exc)
+        return self._command_long("set_yaw", mavlink2.MAV_CMD_CONDITION_YAW, (heading, rate, 0, 0))
+
     def land(self) -> CommandResult:
         """Land where the vehicle is (MAV_CMD_NAV_LAND: ArduCopter switches to LAND)."""
         return self._command_long("land", mavlink2.MAV_CMD_NAV_LAND, (0, 0, 0, math.nan, 0, 0, 0))
@@ -274,6 +287,12 @@ class LinkCommands(LinkCore):
             return None
         return None if got is None else got[0]
 
+    def written_since_boot(self, names: tuple[str, ...]) -> list[str]:
+        """Those of ``names`` this link wrote since the vehicle's latest boot it saw:
+        settings read at boot (PLND_TYPE, VISO_TYPE) do not act before a reboot."""
+        boots = self._telemetry.boots
+        return [n for n in names if self._written_in_boot.get(n) == boots]
+
     def request_param_list(self) -> CommandResult:
         """Ask for every parameter (PARAM_REQUEST_LIST); they arrive as PARAM_VALUEs.
 
@@ -323,6 +342,7 @@ class LinkCommands(LinkCore):
         echoed = got[0]
         expected = cmd.as_float32(fvalue)
         if math.isclose(echoed, expected, rel_tol=1e-6, abs_tol=1e-9):
+            self._written_in_boot[name] = self._telemetry.boots
             return self._finish(
                 CommandResult(True, label, None, "ACCEPTED", (), f"{name} = {echoed:g}", elapsed)
             )

@@ -19,7 +19,15 @@ from backend.link.connection import Transport, TransportDropped
 from backend.link.core import _BACKOFF_S, LinkCore
 from backend.link.plausibility import implausible
 from backend.link.state import LinkState
-from backend.link.telemetry import STATUSTEXT_HISTORY, TELEMETRY_HANDLERS, StatusText
+from backend.link.telemetry import (
+    CLOCK_MESSAGES,
+    POSITION_STALE_MS,
+    STATE_COMMANDS,
+    STATUSTEXT_HISTORY,
+    TELEMETRY_HANDLERS,
+    StatusText,
+    clock_changes,
+)
 
 log = logging.getLogger("backend.link.vehicle_link")
 
@@ -111,6 +119,8 @@ class LinkReceiver(LinkCore):
         target = self._target
         if target is None or src[0] != target[0]:
             return
+        if mtype in CLOCK_MESSAGES and src == target:
+            self._run_isolated(mtype, self._on_vehicle_clock, int(msg.time_boot_ms))
         self._latest[mtype] = msg
         handler = TELEMETRY_HANDLERS.get(mtype)
         if handler is not None:
@@ -128,11 +138,27 @@ class LinkReceiver(LinkCore):
             if self._handler_errors <= 5 or self._handler_errors % 1000 == 0:
                 log.exception("handler for %s failed (%d so far)", mtype, self._handler_errors)
 
+    def _on_vehicle_clock(self, boot_ms: int) -> None:
+        rate = self._stream_rates.get("LOCAL_POSITION_NED")
+        stale_ms = POSITION_STALE_MS if not rate else max(POSITION_STALE_MS, 3000.0 / rate)
+        old = self._telemetry
+        changes = clock_changes(old, boot_ms, stale_ms)
+        if changes.get("boots", old.boots) != old.boots:
+            # What the cache holds came from the previous boot.
+            self._latest = {k: v for k, v in self._latest.items() if k == "HEARTBEAT"}
+            log.info("the vehicle rebooted (its clock went back to %d ms)", boot_ms)
+        if changes.get("position_stale") and not old.position_stale:
+            log.warning("LOCAL_POSITION_NED stopped: the position is no longer current")
+        self._apply(changes)
+
     def _apply_handler(
         self, handler: Callable[[Any, float], dict[str, Any]], msg: Any, now: float
     ) -> None:
         changes = handler(msg, now)
         old = self._telemetry
+        if msg.get_type() == "HEARTBEAT":
+            changes["heartbeats"] = old.heartbeats + 1
+            changes["state_confirmed"] = True
         self._apply(changes)
         if msg.get_type() == "HEARTBEAT":
             new = self._telemetry
@@ -153,6 +179,9 @@ class LinkReceiver(LinkCore):
         )
 
     def _on_command_ack(self, msg: Any) -> None:
+        if msg.command in STATE_COMMANDS and msg.result == mavlink2.MAV_RESULT_ACCEPTED:
+            # whoever asked: the armed flag and mode are old until the next HEARTBEAT
+            self._apply({"state_confirmed": False})
         addressed = getattr(msg, "target_system", 0)
         if addressed not in (0, self._source_system):
             return  # an answer to another ground station
@@ -170,8 +199,9 @@ class LinkReceiver(LinkCore):
         if text is None:
             return
         entry = StatusText(time.time(), int(msg.severity), text)
-        history = (*self._telemetry.statustexts, entry)[-STATUSTEXT_HISTORY:]
-        self._apply({"statustexts": history})
+        old = self._telemetry
+        history = (*old.statustexts, entry)[-STATUSTEXT_HISTORY:]
+        self._apply({"statustexts": history, "statustexts_received": old.statustexts_received + 1})
         self._tracker.on_statustext(entry.severity, text)
         self._emit("statustext", {"severity": entry.severity, "text": text})
 

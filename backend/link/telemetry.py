@@ -20,6 +20,16 @@ from backend.link.state import LinkState
 
 #: How many recent STATUSTEXTs a snapshot keeps.
 STATUSTEXT_HISTORY = 50
+#: The vehicle's clock going back by more than this (ms) is a reboot (a reordered
+#: message is a few ms behind at most).
+REBOOT_BACKSTEP_MS = 1000
+#: LOCAL_POSITION_NED silent this long on the vehicle's own clock is stale (ms), unless
+#: three intervals of the rate asked for are longer: ArduCopter stops sending it when the
+#: EKF loses its position (an EKF failsafe) and only starts ~41 s into a boot.
+POSITION_STALE_MS = 1500
+#: The messages that carry the vehicle's clock (time_boot_ms): the pose streams ArduPilot
+#: fills from one clock. (Others, e.g. a DISTANCE_SENSOR from a driver, may send 0.)
+CLOCK_MESSAGES = frozenset({"ATTITUDE", "LOCAL_POSITION_NED", "GLOBAL_POSITION_INT", "SYSTEM_TIME"})
 
 # SYS_STATUS bit that ArduPilot sets in onboard_control_sensors_health when the
 # pre-arm checks pass (MAV_SYS_STATUS_PREARM_CHECK).
@@ -152,9 +162,28 @@ class Telemetry:
     attitude_rx_monotonic: float | None = None
     local_position_time_boot_ms: int | None = None
     local_position_rx_monotonic: float | None = None
+    # the vehicle's clock (time_boot_ms of its latest time-stamped message) and what
+    # was counted: reboots seen (the clock went back: every vehicle field was reset),
+    # HEARTBEATs (a command's effect is confirmed by one that came after its
+    # COMMAND_ACK) and STATUSTEXTs (an index into the texts that came since a moment)
+    vehicle_time_boot_ms: int | None = None
+    boots: int = 0
+    heartbeats: int = 0
+    statustexts_received: int = 0
+    #: A HEARTBEAT came after the latest accepted command that changes the armed state or
+    #: mode (ArduCopter's heartbeat is 1 Hz: until then ``armed``/``mode`` are the old ones).
+    state_confirmed: bool = False
+    #: LOCAL_POSITION_NED stopped: ``position_ned`` and ``velocity_ned`` were dropped.
+    position_stale: bool = False
     # what the GCS sent for precision landing (ArduPilot reports nothing back)
     landing_targets_sent: int = 0
     last_landing_target: dict[str, float] | None = None
+
+    @property
+    def position_ready(self) -> bool:
+        """The EKF has a horizontal position: LOCAL_POSITION_NED is current and
+        EKF_STATUS_REPORT says so. What GUIDED needs to arm and fly."""
+        return self.position_ned is not None and self.ekf is not None and self.ekf.pos_horiz_ok
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-serialisable form (non-finite floats become ``None``)."""
@@ -182,6 +211,64 @@ def _jsonable(value: Any) -> Any:
     if isinstance(value, list | tuple):
         return [_jsonable(v) for v in value]
     return value
+
+
+#: Commands whose acceptance makes the HEARTBEAT's armed flag and mode out of date.
+STATE_COMMANDS = frozenset(
+    {
+        mavlink2.MAV_CMD_COMPONENT_ARM_DISARM,
+        mavlink2.MAV_CMD_DO_SET_MODE,
+        mavlink2.MAV_CMD_NAV_TAKEOFF,
+        mavlink2.MAV_CMD_NAV_LAND,
+        mavlink2.MAV_CMD_NAV_RETURN_TO_LAUNCH,
+    }
+)
+
+#: What the vehicle reported, forgotten when it reboots (the link's own figures, the
+#: texts and what the GCS sent stay).
+_VEHICLE_FIELDS = (
+    "armed",
+    "mode",
+    "mode_number",
+    "system_status",
+    "attitude",
+    "position_ned",
+    "velocity_ned",
+    "relative_alt_m",
+    "global_position",
+    "heading_deg",
+    "gps",
+    "ekf",
+    "battery",
+    "rangefinder_m",
+    "prearm_ok",
+    "attitude_time_boot_ms",
+    "attitude_rx_monotonic",
+    "local_position_time_boot_ms",
+    "local_position_rx_monotonic",
+    "position_stale",
+    "state_confirmed",
+)
+_DEFAULTS = {f.name: f.default for f in fields(Telemetry)}
+
+
+def clock_changes(tel: Telemetry, boot_ms: int, stale_ms: float) -> dict[str, Any]:
+    """What the vehicle's clock reading ``boot_ms`` changes in ``tel``.
+
+    Going back is a reboot: every vehicle field returns to "not reported" (a position
+    from before the reboot is not where the new boot thinks it is). Going on past
+    ``stale_ms`` since the latest LOCAL_POSITION_NED drops the position.
+    """
+    last = tel.vehicle_time_boot_ms
+    if last is not None and boot_ms < last - REBOOT_BACKSTEP_MS:
+        changes: dict[str, Any] = {name: _DEFAULTS[name] for name in _VEHICLE_FIELDS}
+        changes.update(vehicle_time_boot_ms=boot_ms, boots=tel.boots + 1)
+        return changes
+    changes = {"vehicle_time_boot_ms": boot_ms if last is None else max(last, boot_ms)}
+    stamp = tel.local_position_time_boot_ms
+    if tel.position_ned is not None and stamp is not None and boot_ms - stamp > stale_ms:
+        changes.update(position_ned=None, velocity_ned=None, position_stale=True)
+    return changes
 
 
 # --------------------------------------------------------------------------- handlers
@@ -220,6 +307,7 @@ def _on_local_position(msg: Any, now: float) -> dict[str, Any]:
         "velocity_ned": Vec3(float(msg.vx), float(msg.vy), float(msg.vz)),
         "local_position_time_boot_ms": int(msg.time_boot_ms),
         "local_position_rx_monotonic": now,
+        "position_stale": False,
     }
 
 

@@ -40,6 +40,14 @@ FINAL_SINK_MPS = 0.3
 FINAL_SPEED_MPS = 0.3
 TOUCHDOWN_M = 0.1
 FINAL_GUIDED_S = 10.0
+#: ArduCopter's own precision-landing announcements (AC_PrecLand): the only proof that it
+#: takes the targets; "Failsafe Measures" without them means it has no backend.
+PRECLAND_ACCEPTED = ("PrecLand: Target Found", "PrecLand: Init Complete")
+PRECLAND_FAILSAFE = "PrecLand: Failsafe Measures"
+#: plnd: ArduCopter's precision landing steers the position only; in LAND it holds a fixed
+#: yaw given by MAV_CMD_CONDITION_YAW, sent when the pad's heading is off by more than this
+#: (deg), at most once per RESEND_S.
+YAW_FIX_DEG = 0.5
 
 
 class LandMission(Mission):
@@ -53,6 +61,28 @@ class LandMission(Mission):
         self._last_goto = -math.inf
         self._search_alt: float | None = None
         self._land_accepted = False
+        self._texts_mark: int | None = None
+        self._last_yaw = -math.inf
+        if config.strategy == "plnd":
+            self.record.precland = "silent"
+
+    def _observe(self, tel: Telemetry) -> None:
+        """Note ArduCopter's "PrecLand: ..." texts since the mission started."""
+        if self.config.strategy != "plnd":
+            return
+        count = getattr(tel, "statustexts_received", 0)
+        if self._texts_mark is None:
+            self._texts_mark = count  # what came before this run says nothing about it
+        new = min(count - self._texts_mark, len(tel.statustexts))
+        self._texts_mark = count
+        for entry in tel.statustexts[len(tel.statustexts) - new :] if new > 0 else ():
+            if not entry.text.startswith("PrecLand"):
+                continue
+            self.record.precland_texts.append(entry.text)
+            if entry.text in PRECLAND_ACCEPTED:
+                self.record.precland = "accepted"
+            elif entry.text == PRECLAND_FAILSAFE and self.record.precland != "accepted":
+                self.record.precland = "failsafe"
 
     # --- states -----------------------------------------------------------------------------
     def _s_start(self, now: float, tel: Telemetry) -> None:
@@ -85,6 +115,14 @@ class LandMission(Mission):
             wrong.append("PLND_TYPE = 1 (MAVLink), then reboot the autopilot (read at boot)")
         if wrong:
             self._fail("precision landing is off: set " + " and ".join(wrong))
+            return False
+        since = getattr(self.link, "written_since_boot", None)
+        pending = since(("PLND_ENABLED", "PLND_TYPE")) if since is not None else []
+        if pending:
+            self._fail(
+                f"{' and '.join(pending)} changed since the autopilot booted: ArduCopter reads "
+                "them at boot, reboot it before a precision landing"
+            )
             return False
         offset = self.config.mount.offset_m
         for axis, value in zip("XYZ", offset, strict=True):
@@ -148,6 +186,7 @@ class LandMission(Mission):
         fix = self._take_new_fix()
         if fix is not None:
             self._send_landing_target(fix)
+            self._turn_to_pad(fix, tel)
             return
         height = self._height(tel)
         unseen = self._unseen_s()
@@ -281,6 +320,20 @@ class LandMission(Mission):
             self.record.target(self.now, "landing_target", x, y, z, fix.distance_m, fix.time_usec)
             self.last_target_t = self.now
 
+    def _turn_to_pad(self, fix: Any, tel: Telemetry) -> None:
+        """LAND holds the heading it had: turn it to the pad's, as seen."""
+        if abs(fix.heading_error_deg) < YAW_FIX_DEG or tel.attitude is None:
+            return
+        if self.now - self._last_yaw < RESEND_S or not hasattr(self.link, "set_yaw"):
+            return
+        self._last_yaw = self.now
+        heading = math.degrees(tel.attitude.yaw) - fix.heading_error_deg
+        result = self.link.set_yaw(heading, rate_dps=10.0)
+        if not result.ok:
+            note = f"the vehicle refused to turn to the pad in LAND: {result.detail}"
+            if note not in self.record.notes:
+                self.record.notes.append(note)
+
     def _send_predicted_target(self, tel: Telemetry) -> None:
         target = self._predicted_target(tel)
         stamp = tel.local_position_time_boot_ms
@@ -299,11 +352,24 @@ class LandMission(Mission):
     def _landed(self, tel: Telemetry) -> None:
         touchdown = self._touchdown(tel)
         self.record.touchdown = touchdown
+        outcome, lead = "landed", "landed"
+        verdict = self.record.precland
+        if verdict is not None and verdict != "accepted":
+            outcome = "landed_blind"
+            said = (
+                f"it said '{PRECLAND_FAILSAFE}': no precision-landing backend, set PLND_TYPE 1 "
+                "and reboot"
+                if verdict == "failsafe"
+                else "it never said 'PrecLand: Target Found'"
+            )
+            lead = (
+                f"landed blind, not a precision landing: ArduCopter ignored the targets ({said});"
+            )
         if touchdown is None:
-            self._end("landed", "landed and disarmed (no position to measure the error)")
+            self._end(outcome, f"{lead} disarmed (no position to measure the error)")
         else:
             self._end(
-                "landed",
-                f"landed {touchdown.error_m * 100:.1f} cm from the pad centre, heading off "
+                outcome,
+                f"{lead} {touchdown.error_m * 100:.1f} cm from the pad centre, heading off "
                 f"by {touchdown.heading_error_deg:.1f} deg ({touchdown.source})",
             )

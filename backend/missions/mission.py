@@ -26,7 +26,18 @@ from pipeline import Camera, FrameResult
 #: Below this RC throttle (us) LOITER would descend: no pilot, or the stick is down.
 LOITER_MIN_THROTTLE_PWM = 1400
 #: States after which a mission does nothing more.
-TERMINAL = ("landed", "landed_in_place", "completed", "aborted", "failed", "link_lost")
+TERMINAL = (
+    "landed",
+    "landed_blind",
+    "landed_in_place",
+    "completed",
+    "aborted",
+    "failed",
+    "link_lost",
+)
+#: How long (mission clock) a HEARTBEAT may take to confirm an accepted command's effect
+#: (ArduCopter sends one a second).
+CONFIRM_S = 3.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -154,6 +165,7 @@ class Mission:
             raise ValueError(f"now must be finite and not before {self.now}, got {now!r}")
         self.now = now
         tel = self.link.telemetry
+        self._observe(tel)
         if sample is not None:
             self._take(sample, tel)
         with self._abort_lock:
@@ -170,6 +182,15 @@ class Mission:
                 "link_lost",
                 f"link {tel.state}: left to the vehicle's own failsafe; Visland sends nothing",
             )
+            return
+        if self.state == "start" and not getattr(tel, "state_confirmed", True):
+            # An arm, disarm or mode change was accepted and no HEARTBEAT has come since:
+            # the armed flag and mode in hand are the old ones. Decide on the next one.
+            if now - self.state_since > CONFIRM_S:
+                self._fail(
+                    f"no HEARTBEAT from the vehicle for {CONFIRM_S:g} s after it accepted a "
+                    "command: its armed state and mode are not known"
+                )
             return
         self._seen_armed = self._seen_armed or tel.armed
         if now - self.started > self.config.timeout_s:
@@ -199,9 +220,13 @@ class Mission:
             "fix": None if fix is None else _jsonable(fix.to_dict()),
             "image_size": None if sample is None else [sample.camera.width, sample.camera.height],
             "touchdown": None if self.record.touchdown is None else self.record.touchdown.to_dict(),
+            "precland": self.record.precland,
         }
 
     # --- inside -----------------------------------------------------------------------------
+    def _observe(self, tel: Telemetry) -> None:
+        """Every step, before anything else: what a mission notes from the telemetry."""
+
     def _set_state(self, name: str, reason: str = "") -> None:
         if name == self.state:
             return

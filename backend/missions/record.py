@@ -6,10 +6,24 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-#: Terminal outcomes of a run.
+#: Terminal outcomes of a run. ``landed_blind``: a precision landing ("plnd") whose
+#: targets ArduCopter never took (it came down where it was, on its own estimate).
 #: ``landed_in_place``: came down where it was after the pad was lost with no GPS (an
 #: ExternalNav landing without its vision): not a landing on the pad.
-OUTCOMES = ("landed", "landed_in_place", "completed", "aborted", "failed", "link_lost")
+OUTCOMES = (
+    "landed",
+    "landed_blind",
+    "landed_in_place",
+    "completed",
+    "aborted",
+    "failed",
+    "link_lost",
+)
+#: What ArduCopter said about precision landing during a "plnd" run: "accepted" (its
+#: "PrecLand: Target Found" / "PrecLand: Init Complete"), "failsafe" ("PrecLand: Failsafe
+#: Measures" and never a target: no backend, PLND_TYPE set without a reboot), "silent"
+#: (nothing: the targets were not used).
+PRECLAND_VERDICTS = ("accepted", "failsafe", "silent")
 #: Targets kept in a stored record; beyond this only the count grows (a long hover at
 #: 20 Hz must not make a row of megabytes).
 MAX_TARGETS = 5000
@@ -65,6 +79,9 @@ class RunRecord:
     detections: int = 0
     notes: list[str] = field(default_factory=list)
     touchdown: Touchdown | None = None
+    #: "plnd" runs: :data:`PRECLAND_VERDICTS`, and ArduCopter's "PrecLand: ..." texts.
+    precland: str | None = None
+    precland_texts: list[str] = field(default_factory=list)
     outcome: str | None = None
     message: str = ""
     ended: float | None = None
@@ -103,6 +120,8 @@ class RunRecord:
             "detections": self.detections,
             "notes": self.notes,
             "touchdown": None if self.touchdown is None else self.touchdown.to_dict(),
+            "precland": self.precland,
+            "precland_texts": self.precland_texts,
             "outcome": self.outcome,
             "message": self.message,
             "duration_s": _num(self.duration_s),

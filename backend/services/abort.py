@@ -67,7 +67,8 @@ class AbortService:
                 f"{stopped}The link is {link.state.value}: nothing could be sent; "
                 "the vehicle's own failsafe decides."
             )
-        elif not tel.armed:
+        elif not tel.armed and tel.state_confirmed:
+            # (unconfirmed: it accepted an arm since its last heartbeat; hold it anyway)
             outcome.detail = f"{stopped}The vehicle is disarmed: nothing to hold, nothing sent."
         else:
             self._hold(outcome, stopped)

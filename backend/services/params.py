@@ -37,6 +37,11 @@ LAG_RANGE_S = (0.02, 0.25)
 #: measures it under 10 ms at p95).
 SEND_MS = 10.0
 BATTERY_PARAMS = ("BATT_LOW_VOLT", "BATT_CRT_VOLT", "BATT_LOW_MAH", "BATT_CRT_MAH", "BATT_CAPACITY")
+#: After the set-up's reboot: how long the vehicle may take to come back (wall s), and then
+#: to have its position estimate again (ArduCopter: ~41 s after any boot).
+REBOOT_BACK_S = 60.0
+READY_AFTER_REBOOT_S = 180.0
+
 #: Read whenever the link comes up: the alerts' thresholds and the landing panel's PLND state.
 WATCHED = (
     *BATTERY_PARAMS,
@@ -263,17 +268,23 @@ class ParamService:
                     "detail": f"The vehicle refused {name}: {write.result.detail}; "
                     "nothing more was written and no reboot was sent.",
                 }
+        boots = self._link.telemetry.boots
         reboot = self.reboot(why=why)
         measured = "none measured yet" if latency is None else f"measured {latency:.0f} ms"
         detail = (
             f"Precision landing set up: {len(writes)} parameters written, PLND_LAG {lag:g} s "
             f"({measured} capture to result, plus {SEND_MS:g} ms to send)"
         )
-        detail += (
-            "; the autopilot is rebooting."
-            if reboot.ok
-            else f"; the reboot was refused ({reboot.detail}), reboot it before landing."
-        )
+        if reboot.ok:
+            detail += (
+                "; the autopilot is rebooting. Missions wait for its position estimate "
+                "(ArduCopter: about 40 s after a boot); the event log says when it is back."
+            )
+            threading.Thread(
+                target=self._follow_reboot, args=(boots, why), name="params-reboot", daemon=True
+            ).start()
+        else:
+            detail += f"; the reboot was refused ({reboot.detail}), reboot it before landing."
         return {
             "ok": reboot.ok,
             "lag_s": lag,
@@ -342,6 +353,38 @@ class ParamService:
             "reboot": reboot.to_dict(),
             "detail": detail,
         }
+
+    def _follow_reboot(self, boots: int, why: str) -> None:
+        """Say when the vehicle is back from the set-up's reboot (with the values it
+        booted with) and when it has its position estimate again: only then can it fly."""
+        link = self._link
+        back = link.wait_until(lambda t: t.boots > boots and t.state == LinkState.UP, REBOOT_BACK_S)
+        if not back:
+            self._events.emit(
+                "param",
+                f"the autopilot was not seen back from its reboot within {REBOOT_BACK_S:g} s "
+                f"({why})",
+                {"reboot": True, "back": False},
+            )
+            return
+        values = {name: link.get_param(name, timeout=2.0) for name in ("PLND_ENABLED", "PLND_TYPE")}
+        said = ", ".join(f"{n} {'unread' if v is None else f'{v:g}'}" for n, v in values.items())
+        self._events.emit(
+            "param",
+            f"the autopilot is back from its reboot with {said}; waiting for its position "
+            f"estimate ({why})",
+            {"reboot": True, "back": True, **values},
+        )
+        if link.wait_until(lambda t: t.position_ready, READY_AFTER_REBOOT_S):
+            text = f"the autopilot has its position estimate again: ready to fly ({why})"
+            ready = True
+        else:
+            text = (
+                f"the autopilot has no position estimate {READY_AFTER_REBOOT_S:g} s after its "
+                f"reboot ({why})"
+            )
+            ready = False
+        self._events.emit("param", text, {"reboot": True, "ready": ready})
 
     def _log(self, write: Write, why: str) -> None:
         old = "unknown" if write.old is None else f"{write.old:g}"

@@ -1,10 +1,14 @@
 """``python -m bench.scenarios land --runs 20 --seed 1 [--strategy plnd|guided] [--wind 3]
-[--json] [--mavlink URL]``: land many times, print one JSON summary.
+[--json] [--mavlink URL | --vehicle sitl]``: land many times, print one JSON summary.
 
-Without ``--mavlink`` each run is the in-process stand-in in lockstep (deterministic for
-a seed, faster than real time); with it, the same mission flies the named vehicle in
-real time (e.g. ArduCopter SITL; the pad and camera are simulated, the touchdown error
-comes from telemetry).
+By default each run is the in-process stand-in in lockstep (deterministic for a seed,
+faster than real time). ``--vehicle sitl``: each run starts genuine ArduCopter SITL of
+its own (fresh eeprom), sets it up at ``--setup-speedup`` (waiting for its real
+readiness; for plnd the PLND parameters and a reboot), then lands with the camera in the
+loop at ``--flight-speedup`` on the vehicle's clock; the camera is rendered from, and
+the touchdown measured against, the simulator's true state (SIM_STATE); the JSON adds
+every run. There is no wind on SITL (its own defaults). ``--mavlink URL``: fly that
+vehicle in real time (camera from telemetry, touchdown from telemetry).
 """
 
 from __future__ import annotations
@@ -15,6 +19,8 @@ import sys
 
 from backend.missions import STRATEGIES
 from bench.scenarios.land import RunSpec, run_one, summarize
+from bench.scenarios.observed import SitlDriver
+from sim.sitl import SitlError, find_sitl_dir
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -28,6 +34,13 @@ def _parser() -> argparse.ArgumentParser:
     land.add_argument("--camera-hz", type=float, default=20.0, help="camera and control rate")
     land.add_argument("--json", action="store_true", help="print only the JSON summary")
     land.add_argument("--mavlink", default=None, help="fly this vehicle instead (real time)")
+    land.add_argument(
+        "--vehicle", choices=("standin", "sitl"), default="standin", help="default: standin"
+    )
+    land.add_argument("--setup-speedup", type=float, default=10.0, help="SITL, before landing")
+    land.add_argument(
+        "--flight-speedup", type=float, default=1.0, help="SITL, with the camera in the loop"
+    )
     return p
 
 
@@ -43,12 +56,29 @@ def main(argv: list[str] | None = None) -> int:
     if not 1.0 <= args.camera_hz <= 100.0:
         print("--camera-hz must be within 1..100", file=sys.stderr)
         return 2
+    sitl = args.vehicle == "sitl"
+    if sitl and args.mavlink:
+        print("--vehicle sitl starts its own vehicle: no --mavlink", file=sys.stderr)
+        return 2
+    for name in ("setup_speedup", "flight_speedup"):
+        if not 0.1 <= getattr(args, name) <= 50.0:
+            print(f"--{name.replace('_', '-')} must be within 0.1..50", file=sys.stderr)
+            return 2
+    if sitl and find_sitl_dir() is None:
+        print("no ArduCopter SITL (../shared/sitl or $VISLAND_SITL_DIR)", file=sys.stderr)
+        return 2
     results = []
     for i in range(args.runs):
-        spec = RunSpec.draw(args.seed, i, args.strategy, args.wind)
+        # SITL has no wind of the runner's: draw without it (the same starts otherwise)
+        spec = RunSpec.draw(args.seed, i, args.strategy, 0.0 if sitl else args.wind)
         try:
-            result = run_one(spec, url=args.mavlink, camera_hz=args.camera_hz)
-        except RuntimeError as exc:
+            driver = (
+                SitlDriver(setup_speedup=args.setup_speedup, flight_speedup=args.flight_speedup)
+                if sitl
+                else None
+            )
+            result = run_one(spec, url=args.mavlink, camera_hz=args.camera_hz, driver=driver)
+        except (RuntimeError, SitlError) as exc:
             print(f"run {i}: could not fly: {exc}", file=sys.stderr)
             return 1
         results.append(result)
@@ -62,7 +92,18 @@ def main(argv: list[str] | None = None) -> int:
                 file=sys.stderr,
                 flush=True,
             )
-    summary = summarize(args.strategy, results)
+    summary: dict[str, object] = summarize(args.strategy, results)
+    if sitl:
+        summary = {
+            **summary,
+            "vehicle": "ArduCopter SITL (fresh eeprom per run)",
+            "touchdown_measured_from": "SIM_STATE (simulator truth, EKF origin frame)",
+            "setup_speedup": args.setup_speedup,
+            "flight_speedup": args.flight_speedup,
+            "camera_hz": args.camera_hz,
+            "precland_accepted": sum(r.precland == "accepted" for r in results),
+            "per_run": [r.to_dict() for r in results],
+        }
     print(json.dumps(summary, indent=None if args.json else 2))
     return 0 if all(r.success for r in results) else 1
 

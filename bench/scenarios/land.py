@@ -100,6 +100,11 @@ class RunResult:
     wall_s: float
     states: list[dict[str, Any]] = field(default_factory=list)
     record: RunRecord | None = None
+    #: "plnd": did ArduCopter take the targets (the record's verdict); None for "guided".
+    precland: str | None = None
+    precland_texts: list[str] = field(default_factory=list)
+    #: Where the touchdown was measured: "truth" (the simulator's) or "telemetry".
+    touchdown_source: str | None = None
 
     @property
     def success(self) -> bool:
@@ -121,6 +126,9 @@ class RunResult:
             "frames": self.frames,
             "detections": self.detections,
             "wall_s": round(self.wall_s, 2),
+            "precland": self.precland,
+            "precland_texts": self.precland_texts,
+            "touchdown_source": self.touchdown_source,
             "spec": self.spec.__dict__,
         }
 
@@ -131,14 +139,14 @@ class LockstepDriver:
 
     deterministic = True
 
-    def __init__(self, spec: RunSpec) -> None:
+    def __init__(self, spec: RunSpec, *, ready_after_scale: float = 0.01) -> None:
         from bench.scenarios.lockstep import LockstepLink
         from sim.vehicle import SimConfig, SimVehicle, VehicleServer
 
         self.sim = SimVehicle(
             SimConfig(
                 seed=spec.seed,
-                ready_after_scale=0.01,
+                ready_after_scale=ready_after_scale,
                 pad_north=PAD_NE[0],
                 pad_east=PAD_NE[1],
                 pad_heading_deg=spec.pad_heading_deg,
@@ -160,8 +168,9 @@ class LockstepDriver:
         self.raw.start()
         self.link = LockstepLink(self.raw, self.server)
 
-    def connect(self, timeout_s: float = 10.0) -> None:
-        """Bring the link up without letting simulated time depend on the wall clock."""
+    def connect(self, timeout_s: float = 10.0, *, position: bool = True) -> None:
+        """Bring the link up without letting simulated time depend on the wall clock;
+        ``position``: and wait for the first position estimate."""
         deadline = time.monotonic() + timeout_s
         while self.server.peers < 1:  # nothing sent before the link listens
             if time.monotonic() > deadline:
@@ -174,11 +183,23 @@ class LockstepDriver:
         limit = self.sim.time_s + 30.0
         while True:
             tel = self.raw.telemetry
-            if tel.position_ned is not None and tel.attitude is not None:
+            if tel.attitude is not None and (tel.position_ned is not None or not position):
                 return
             if self.sim.time_s > limit:
                 raise RuntimeError("the stand-in reported no position")
             self.advance(0.05)
+
+    def await_reboot(self, boots: int) -> None:
+        """Let the stand-in's reboot silence pass (no barrier: a rebooting vehicle answers
+        nothing; a fixed span of simulated time keeps runs deterministic), then check
+        that the link has seen the new boot."""
+
+        end = self.sim.time_s + REBOOT_SILENCE_S + 0.5
+        while self.sim.time_s < end:
+            self.server.advance(0.05)
+        self.link.sync()
+        if not self.raw.wait_until(lambda t: t.boots > boots, 5.0):
+            raise RuntimeError("set-up: the link did not see the stand-in's reboot")
 
     def now(self) -> float:
         return self.sim.time_s
@@ -221,12 +242,13 @@ class RealtimeDriver:
         self._next = time.monotonic()
 
     def connect(self, timeout_s: float = 30.0) -> None:
-        ok = self.raw.wait_until(
-            lambda t: t.state == LinkState.UP and t.position_ned is not None, timeout=timeout_s
-        )
-        if not ok:
-            raise RuntimeError(f"no vehicle with a position estimate at {self.raw.url}")
+        if not self.raw.wait_until(lambda t: t.state == LinkState.UP, timeout=timeout_s):
+            raise RuntimeError(f"no vehicle at {self.raw.url}")
         self._next = time.monotonic()
+
+    def await_reboot(self, boots: int) -> None:
+        if not self.raw.wait_until(lambda t: t.boots > boots and t.state == LinkState.UP, 60.0):
+            raise RuntimeError("set-up: the vehicle did not come back from its reboot")
 
     def now(self) -> float:
         return time.monotonic()
@@ -261,28 +283,78 @@ def _wait(driver: Any, dt: float, until: Any, limit_s: float, what: str) -> None
         driver.advance(dt)
 
 
+#: What the runner writes for ArduCopter's precision landing (then reboots: PLND_TYPE
+#: is read at boot).
+PLND_SETUP = (("PLND_ENABLED", 1.0), ("PLND_TYPE", 1.0), ("PLND_EST_TYPE", 1.0))
+#: Vehicle seconds to wait for a position estimate (ArduCopter: ~41 s after a boot).
+READY_LIMIT_S = 120.0
+#: Vehicle seconds for a HEARTBEAT to confirm an accepted command (one a second).
+CONFIRM_LIMIT_S = 5.0
+
+
+def set_up_precland(driver: Any) -> None:
+    """Write :data:`PLND_SETUP`, reboot, and wait until the link has seen the new boot."""
+    link = driver.link
+    for name, value in PLND_SETUP:
+        if link.get_param(name) != value:
+            result = link.set_param(name, value)
+            if not result.ok:
+                raise RuntimeError(f"set-up: could not set {name}: {result.detail}")
+    _reboot(driver)
+
+
+def _reboot(driver: Any) -> None:
+    """Reboot the vehicle and wait until the link has seen the new boot."""
+    link = driver.link
+    # The link sees a reboot as the vehicle's clock going back: a vehicle younger than
+    # its reboot takes (the stand-in in lockstep) would not show one.
+    _wait(driver, 0.1, lambda t: (t.vehicle_time_boot_ms or 0) > 5000, 30, "5 s of boot")
+    boots = link.telemetry.boots
+    result = link.reboot()
+    if not result.ok:
+        raise RuntimeError(f"set-up: reboot refused: {result.detail}")
+    driver.await_reboot(boots)
+
+
+def _confirmed_guided(driver: Any) -> None:
+    """GUIDED, as a HEARTBEAT after the ACK says (ArduCopter undoes a mode set while it
+    boots; a few tries)."""
+    link = driver.link
+    for _ in range(3):
+        result = link.set_mode("GUIDED")
+        if not result.ok:
+            raise RuntimeError(f"set-up: GUIDED refused: {result.detail}")
+        _wait(driver, 0.05, lambda t: t.state_confirmed, CONFIRM_LIMIT_S, "GUIDED (heartbeat)")
+        if link.telemetry.mode == "GUIDED":
+            return
+    raise RuntimeError(f"set-up: GUIDED accepted, the heartbeat says {link.telemetry.mode}")
+
+
 def fly_to_start(driver: Any, spec: RunSpec, *, precland: bool | None = None) -> None:
-    """Take off and fly to the run's start; for ``plnd`` runs (or ``precland``) turn on
-    precision landing first (PLND_TYPE needs a reboot: done on the stand-in)."""
+    """Take off and fly to the run's start; for ``plnd`` runs (or ``precland``) set up
+    precision landing first (parameters, reboot). Waits on the vehicle's own readiness
+    (its position estimate) and confirms GUIDED and arming by a heartbeat each."""
     link = driver.link
     if precland if precland is not None else spec.strategy == "plnd":
-        for name in ("PLND_ENABLED", "PLND_TYPE"):
-            if link.get_param(name) != 1 and not link.set_param(name, 1).ok:
-                raise RuntimeError(f"set-up: could not set {name}")
-        if driver.deterministic:  # PLND_TYPE is read at boot
-            reboot_standin(driver)
+        set_up_precland(driver)
     if spec.strategy == "extnav":
         setup_extnav(driver)
-    _wait(driver, 0.1, lambda t: t.position_ned is not None, 30, "position estimate")
-    if not link.set_mode("GUIDED").ok:
-        raise RuntimeError("set-up: GUIDED refused")
+    _wait(driver, 0.1, lambda t: t.position_ready, READY_LIMIT_S, "position estimate")
+    on_ready = getattr(driver, "on_ready", None)
+    if on_ready is not None:
+        on_ready()
+    _confirmed_guided(driver)
     t0 = driver.now()
-    while not link.arm().ok:
+    while not (result := link.arm()).ok:
         if driver.now() - t0 > 30:
-            raise RuntimeError("set-up: the vehicle would not arm")
+            raise RuntimeError(f"set-up: the vehicle would not arm: {result.detail}")
         driver.advance(0.5)
-    if not link.takeoff(spec.start_alt_m).ok:
-        raise RuntimeError("set-up: take-off refused")
+    _wait(driver, 0.05, lambda t: t.state_confirmed, CONFIRM_LIMIT_S, "arming (heartbeat)")
+    tel = link.telemetry
+    if not tel.armed or tel.mode != "GUIDED":
+        raise RuntimeError(f"set-up: after arming the heartbeat says {tel.mode}, armed={tel.armed}")
+    if not (result := link.takeoff(spec.start_alt_m)).ok:
+        raise RuntimeError(f"set-up: take-off refused: {result.detail}")
     _wait(
         driver,
         0.1,
@@ -309,30 +381,22 @@ def fly_to_start(driver: Any, spec: RunSpec, *, precland: bool | None = None) ->
 
 def setup_extnav(driver: Any) -> None:
     """What the station's external-navigation set-up writes, then a reboot (VISO_TYPE is
-    read at boot; done on the stand-in, as for PLND_TYPE)."""
+    read at boot)."""
     link = driver.link
     wanted = [*EXTNAV_PARAMS, ("ARMING_CHECK", float(ARMING_CHECK_ALL_BUT_VISION))]
     for name, value in wanted:
         if link.get_param(name) != value and not link.set_param(name, value).ok:
             raise RuntimeError(f"set-up: could not set {name}")
-    if driver.deterministic:
-        reboot_standin(driver)
+    _reboot(driver)
 
 
-def reboot_standin(driver: Any) -> None:
-    """Reboot the lockstep stand-in and let its silent boot pass (it hears nothing
-    meanwhile, not even the barrier's parameter read)."""
-    if not driver.link.reboot().ok:
-        raise RuntimeError("set-up: reboot refused")
-    driver.server.advance(REBOOT_SILENCE_S + 0.5)
-    driver.advance(0.1)
-
-
-def camera_config(spec: RunSpec) -> SimCameraConfig:
-    """The simulated camera of a run: the pad where the stand-in has it, the run's SNR."""
+def camera_config(spec: RunSpec, *, pad_down_m: float = 0.0) -> SimCameraConfig:
+    """The simulated camera of a run: the pad where the stand-in has it (on the ground at
+    ``pad_down_m``, true NED), the run's SNR."""
     return SimCameraConfig(
         pad_north_m=PAD_NE[0],
         pad_east_m=PAD_NE[1],
+        pad_down_m=pad_down_m,
         pad_heading_deg=spec.pad_heading_deg,
         pad_size_m=PAD_SIZE_M,
         snr_db=spec.snr_db,
@@ -408,26 +472,37 @@ def run_one(
     config_overrides: dict[str, Any] | None = None,
     hide_pad: Callable[[Any, Mission], bool] | None = None,
     after_step: Callable[[Any, Mission], None] | None = None,
+    driver: Any = None,
 ) -> RunResult:
-    """Fly one landing run (take off, reach the start, land by vision) and measure it."""
+    """Fly one landing run (take off, reach the start, land by vision) and measure it.
+
+    The vehicle: ``driver`` (e.g. a :class:`~bench.scenarios.observed.SitlDriver`, closed
+    here), else the vehicle at ``url`` in real time, else the stand-in in lockstep.
+    """
     wall0 = time.perf_counter()
-    driver: Any = RealtimeDriver(url) if url else LockstepDriver(spec)
+    if driver is None:
+        driver = RealtimeDriver(url) if url else LockstepDriver(spec)
     try:
         driver.connect()
         fly_to_start(driver, spec)
+        begin = getattr(driver, "begin_landing", None)
+        if begin is not None:
+            begin()
+        overrides = dict(config_overrides or {})
+        overrides.setdefault("pad_down_m", getattr(driver, "ground_ekf_d", 0.0))
         config = LandConfig(
             strategy=spec.strategy,
             pad_north_m=PAD_NE[0],
             pad_east_m=PAD_NE[1],
             pad_heading_deg=spec.pad_heading_deg,
-            **(config_overrides or {}),
+            **overrides,
         )
         start = driver.now()
         mission = land_mission(driver.link, config, now=start, touchdown_truth=driver.touchdown)
         fly(
             driver,
             mission,
-            camera_config(spec),
+            camera_config(spec, pad_down_m=getattr(driver, "ground_true_d", 0.0)),
             camera_hz=camera_hz,
             hide_pad=hide_pad,
             after_step=after_step,
@@ -446,6 +521,9 @@ def run_one(
             wall_s=time.perf_counter() - wall0,
             states=rec.states,
             record=rec,
+            precland=rec.precland,
+            precland_texts=list(rec.precland_texts),
+            touchdown_source=None if td is None else td.source,
         )
     finally:
         driver.close()

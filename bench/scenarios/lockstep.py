@@ -31,7 +31,7 @@ class LockstepError(RuntimeError):
 class LockstepLink:
     """Wraps ``link`` (started, connected to ``server``) for use from the clock's thread.
 
-    Exposes what missions use: ``telemetry``, ``set_mode``, ``arm``, ``takeoff``,
+    Exposes what missions use: ``telemetry``, ``set_mode``, ``arm``, ``disarm``, ``takeoff``,
     ``goto_local_ned``, ``set_velocity_ned``, ``send_landing_target``, ``get_param``,
     ``set_param``, ``reboot``.
     """
@@ -95,8 +95,14 @@ class LockstepLink:
     def arm(self) -> CommandResult:
         return self.pump(self.link.arm)
 
+    def disarm(self) -> CommandResult:
+        return self.pump(self.link.disarm)
+
     def takeoff(self, altitude_m: float) -> CommandResult:
         return self.pump(self.link.takeoff, altitude_m)
+
+    def set_yaw(self, heading_deg: float, **kwargs: Any) -> CommandResult:
+        return self.pump(self.link.set_yaw, heading_deg, **kwargs)
 
     def reboot(self) -> CommandResult:
         return self.pump(self.link.reboot)
@@ -109,6 +115,9 @@ class LockstepLink:
 
     def set_ekf_source_set(self, number: int) -> CommandResult:
         return self.pump(self.link.set_ekf_source_set, number)
+
+    def written_since_boot(self, names: tuple[str, ...]) -> list[str]:
+        return self.link.written_since_boot(names)
 
     # --- not acknowledged: sent at once, handled at the next sync -------------------------------
     def goto_local_ned(self, *args: Any, **kwargs: Any) -> CommandResult:

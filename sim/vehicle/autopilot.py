@@ -154,11 +154,16 @@ class SimVehicle(FlightModes):
         self.home_ned: Vec3 = (0.0, 0.0, 0.0)
         self._update_estimate(force=True)
 
-    def reboot(self) -> int:
-        """MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN: refused while armed, as ArduCopter does."""
+    def reboot(self, down_s: float = 0.0) -> int:
+        """MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN: refused while armed, as ArduCopter does.
+
+        ``down_s``: how long the autopilot is down first; its clock starts after that (as
+        SITL's: the new boot's first messages say a few ms).
+        """
         if self.armed:
             return FAILED
         self._boot()
+        self.boot_time += down_s
         return ACCEPTED
 
     @property
@@ -169,7 +174,7 @@ class SimVehicle(FlightModes):
     @property
     def time_boot_ms(self) -> int:
         """Milliseconds since boot, as MAVLink's time_boot_ms."""
-        return int(self.boot_s * 1000.0) & 0xFFFFFFFF
+        return int(max(0.0, self.boot_s) * 1000.0) & 0xFFFFFFFF
 
     @property
     def truth(self) -> VehicleTruth:
@@ -452,8 +457,9 @@ class SimVehicle(FlightModes):
     def condition_yaw(
         self, angle_deg: float, rate_dps: float, direction: int, relative: bool
     ) -> int:
-        """MAV_CMD_CONDITION_YAW in GUIDED."""
-        if self.mode != GUIDED or not self.armed:
+        """MAV_CMD_CONDITION_YAW in GUIDED and in LAND (ArduCopter's LAND follows a
+        fixed yaw too; a mode change forgets it)."""
+        if self.mode not in (GUIDED, LAND) or not self.armed:
             return FAILED
         if not math.isfinite(angle_deg):
             return FAILED

@@ -65,7 +65,7 @@ class VehicleServer:
         ``tcp:127.0.0.1:5760`` (listen; port 0 picks one), ``udp:HOST:PORT`` (send
         there, reply to the last sender) or ``/dev/pts/N[,baud]``.
     speedup : float
-        Sim seconds per wall second when free-running.
+        Sim seconds per wall second when free-running; may be changed while it runs.
     lockstep : bool
         When True the clock stands still until the owner calls `advance`.
     """
@@ -209,8 +209,12 @@ class VehicleServer:
     def _sim_loop(self) -> None:
         step = 1.0 / self.sim.config.physics_hz
         wall0, sim0 = time.monotonic(), self.sim.time_s
+        speed = self.speedup
         while not self._stop.is_set():
-            target = sim0 + self.speedup * (time.monotonic() - wall0)
+            if self.speedup != speed:  # changed while running (as SITL's SIM_SPEEDUP)
+                speed = self.speedup
+                wall0, sim0 = time.monotonic(), self.sim.time_s
+            target = sim0 + speed * (time.monotonic() - wall0)
             with self._lock:
                 self._handle_inbox()
                 n = 0
@@ -220,12 +224,12 @@ class VehicleServer:
                     if n % 40 == 0:
                         self._handle_inbox()
             behind = target - self.sim.time_s
-            if behind > max(1.0, self.speedup):
+            if behind > max(1.0, speed):
                 # Cannot keep up (slow machine, huge speedup): run as fast as we can
                 # instead of piling up debt.
                 wall0, sim0 = time.monotonic(), self.sim.time_s
             elif behind < step:
-                self._stop.wait(min(0.004, max(0.0005, (step - behind) / self.speedup)))
+                self._stop.wait(min(0.004, max(0.0005, (step - behind) / speed)))
 
     def _tick(self, dt: float) -> None:
         try:
@@ -456,7 +460,7 @@ class VehicleServer:
                 return FAILED
             # Ack first: a real autopilot acks, then goes quiet while it reboots.
             self._ack(msg, command, ACCEPTED)
-            sim.reboot()
+            sim.reboot(REBOOT_SILENCE_S)
             self._home_sent = None
             self._silent_until = sim.time_s + REBOOT_SILENCE_S
             return None

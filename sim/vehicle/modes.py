@@ -206,7 +206,7 @@ class FlightModes:
 
     def _update_yaw_goal(self, dt: float) -> None:
         goal = self._yaw_goal
-        if self.mode != GUIDED:
+        if self.mode not in (GUIDED, LAND):  # the modes that take CONDITION_YAW
             self._yaw_goal = None
             return
         if goal is not None:

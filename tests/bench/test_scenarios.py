@@ -139,3 +139,16 @@ def test_mavlink_url_flies_any_vehicle_in_real_time():
     assert result.touchdown_error_m < 0.10
     assert sim.landed_at is not None
     assert math.dist(sim.landed_at, PAD_NE) < 0.15  # the truth agrees
+
+
+@pytest.mark.parametrize(
+    ("extra", "says"),
+    [
+        (["--vehicle", "sitl", "--mavlink", "tcp:127.0.0.1:5760"], "no --mavlink"),
+        (["--vehicle", "sitl", "--flight-speedup", "0"], "--flight-speedup must be within"),
+        (["--setup-speedup", "99"], "--setup-speedup must be within"),
+    ],
+)
+def test_bad_vehicle_options_are_refused_before_anything_starts(extra, says, capsys):
+    assert main(["land", "--runs", "1", *extra]) == 2
+    assert says in capsys.readouterr().err

@@ -91,11 +91,11 @@ export function activeAlerts(x: AlertInput): Alert[] {
   const m = x.mission;
   // an abort the operator asked for is no surprise: the ABORT answer already says so
   const byOperator = /operator/i.test(m?.message ?? "");
-  if (m && !byOperator && (m.outcome === "aborted" || m.outcome === "failed" || m.outcome === "link_lost" || m.outcome === "landed_in_place")) {
+  if (m && !byOperator && (m.outcome === "aborted" || m.outcome === "failed" || m.outcome === "link_lost" || m.outcome === "landed_in_place" || m.outcome === "landed_blind")) {
     out.push({
       id: `mission-${m.run_id ?? "?"}-${m.outcome}`,
       level: "warning",
-      title: `Mission ${m.outcome === "link_lost" ? "lost its link" : m.outcome === "landed_in_place" ? "landed off the pad" : m.outcome}`,
+      title: `Mission ${m.outcome === "link_lost" ? "lost its link" : m.outcome === "landed_in_place" ? "landed off the pad" : m.outcome === "landed_blind" ? "landed blind (not a precision landing)" : m.outcome}`,
       detail: m.message ?? "",
     });
   }

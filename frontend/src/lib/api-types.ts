@@ -1516,6 +1516,16 @@ export interface components {
             notes?: string[];
             /** Outcome */
             outcome?: string | null;
+            /**
+             * Precland
+             * @description plnd runs: did ArduCopter take the targets? accepted ('PrecLand: Target Found' / 'Init Complete'), failsafe ('PrecLand: Failsafe Measures': no backend), silent (said nothing). A plnd landing that is not accepted ends 'landed_blind'.
+             */
+            precland?: ("accepted" | "failsafe" | "silent") | null;
+            /**
+             * Precland Texts
+             * @description ArduCopter's 'PrecLand: ...' texts during the run
+             */
+            precland_texts?: string[];
             /** States */
             states?: components["schemas"]["StateChange"][];
             /** Strategy */
@@ -1600,6 +1610,11 @@ export interface components {
             outcome: string | null;
             /** Pad Seen Age S */
             pad_seen_age_s: number | null;
+            /**
+             * Precland
+             * @description plnd runs: did ArduCopter take the targets? accepted ('PrecLand: Target Found' / 'Init Complete'), failsafe ('PrecLand: Failsafe Measures': no backend), silent (said nothing). A plnd landing that is not accepted ends 'landed_blind'.
+             */
+            precland?: ("accepted" | "failsafe" | "silent") | null;
             /** Run Id */
             run_id: number | null;
             /** State */
@@ -2251,6 +2266,11 @@ export interface components {
             /** Attitude Time Boot Ms */
             attitude_time_boot_ms: number | null;
             battery: components["schemas"]["Battery"] | null;
+            /**
+             * Boots
+             * @description reboots seen (the vehicle's clock went back)
+             */
+            boots: number;
             /** Crc Errors */
             crc_errors: number;
             ekf: components["schemas"]["EkfStatus"] | null;
@@ -2262,6 +2282,11 @@ export interface components {
             heading_deg: number | null;
             /** Heartbeat Age S */
             heartbeat_age_s: number | null;
+            /**
+             * Heartbeats
+             * @description HEARTBEATs received from the vehicle
+             */
+            heartbeats: number;
             /**
              * Implausible
              * @description messages dropped: their values cannot be real
@@ -2287,6 +2312,11 @@ export interface components {
             /** Packets Lost Pct */
             packets_lost_pct: number | null;
             position_ned: components["schemas"]["Vec3"] | null;
+            /**
+             * Position Stale
+             * @description LOCAL_POSITION_NED stopped coming: position_ned is null until it returns
+             */
+            position_stale: boolean;
             /** Prearm Ok */
             prearm_ok: boolean | null;
             /** Rangefinder M */
@@ -2300,12 +2330,24 @@ export interface components {
              * @enum {string}
              */
             state: "connecting" | "up" | "lost" | "closed";
+            /**
+             * State Confirmed
+             * @description a HEARTBEAT came after the latest accepted arm/disarm/mode command
+             */
+            state_confirmed: boolean;
             /** Statustexts */
             statustexts: components["schemas"]["StatusText"][];
+            /** Statustexts Received */
+            statustexts_received: number;
             /** System Status */
             system_status: number | null;
             /** Vehicle Sysid */
             vehicle_sysid: number | null;
+            /**
+             * Vehicle Time Boot Ms
+             * @description the vehicle's clock: time_boot_ms of its latest time-stamped message
+             */
+            vehicle_time_boot_ms: number | null;
             velocity_ned: components["schemas"]["Vec3"] | null;
         };
         /** TelemetryMessage */
@@ -2318,6 +2360,11 @@ export interface components {
             /** Attitude Time Boot Ms */
             attitude_time_boot_ms: number | null;
             battery: components["schemas"]["Battery"] | null;
+            /**
+             * Boots
+             * @description reboots seen (the vehicle's clock went back)
+             */
+            boots: number;
             /** Crc Errors */
             crc_errors: number;
             ekf: components["schemas"]["EkfStatus"] | null;
@@ -2329,6 +2376,11 @@ export interface components {
             heading_deg: number | null;
             /** Heartbeat Age S */
             heartbeat_age_s: number | null;
+            /**
+             * Heartbeats
+             * @description HEARTBEATs received from the vehicle
+             */
+            heartbeats: number;
             /**
              * Implausible
              * @description messages dropped: their values cannot be real
@@ -2354,6 +2406,11 @@ export interface components {
             /** Packets Lost Pct */
             packets_lost_pct: number | null;
             position_ned: components["schemas"]["Vec3"] | null;
+            /**
+             * Position Stale
+             * @description LOCAL_POSITION_NED stopped coming: position_ned is null until it returns
+             */
+            position_stale: boolean;
             /** Prearm Ok */
             prearm_ok: boolean | null;
             /** Rangefinder M */
@@ -2367,8 +2424,15 @@ export interface components {
              * @enum {string}
              */
             state: "connecting" | "up" | "lost" | "closed";
+            /**
+             * State Confirmed
+             * @description a HEARTBEAT came after the latest accepted arm/disarm/mode command
+             */
+            state_confirmed: boolean;
             /** Statustexts */
             statustexts: components["schemas"]["StatusText"][];
+            /** Statustexts Received */
+            statustexts_received: number;
             /** System Status */
             system_status: number | null;
             /**
@@ -2378,6 +2442,11 @@ export interface components {
             type: "telemetry";
             /** Vehicle Sysid */
             vehicle_sysid: number | null;
+            /**
+             * Vehicle Time Boot Ms
+             * @description the vehicle's clock: time_boot_ms of its latest time-stamped message
+             */
+            vehicle_time_boot_ms: number | null;
             velocity_ned: components["schemas"]["Vec3"] | null;
         };
         /** Touchdown */

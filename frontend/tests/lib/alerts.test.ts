@@ -46,6 +46,8 @@ describe("activeAlerts", () => {
     const inPlace = activeAlerts({ ...quiet, mission: { run_id: 6, outcome: "landed_in_place", message: "landed in place 1.10 m from the pad centre" } });
     expect(inPlace.map((a) => [a.id, a.title])).toEqual([["mission-6-landed_in_place", "Mission landed off the pad"]]);
     // the operator's own abort is no surprise
+    const blind = activeAlerts({ ...quiet, mission: { run_id: 7, outcome: "landed_blind", message: "landed blind, not a precision landing" } });
+    expect(blind.map((a) => a.title)).toEqual(["Mission landed blind (not a precision landing)"]);
     expect(activeAlerts({ ...quiet, mission: { run_id: 5, outcome: "aborted", message: "stopped by the operator's ABORT" } })).toEqual([]);
   });
   it("leaves acknowledged ones out", () => {

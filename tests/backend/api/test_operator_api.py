@@ -92,6 +92,9 @@ def test_a_write_is_confirmed_by_the_vehicle_and_recorded(client):
 
 def test_precision_landing_set_up_writes_plnd_and_reboots(client):
     latency = client.get("/api/status").json()["pipeline"]["latency_ms"]
+    # a reboot shows as the vehicle's clock going back: older than the reboot takes
+    wait_for(lambda: (client.get("/api/telemetry").json()["vehicle_time_boot_ms"] or 0) > 5000, 30)
+    boots = client.get("/api/telemetry").json()["boots"]
     answer = client.post("/api/params/precland-setup", headers=AUTH)
     assert answer.status_code == 200, answer.text
     body = answer.json()
@@ -110,6 +113,12 @@ def test_precision_landing_set_up_writes_plnd_and_reboots(client):
     assert any(
         "autopilot reboot sent (precision landing set-up)" in t for t in events(client, "param")
     )
+    # the station follows the reboot: back with the values, then its position estimate
+    back = "the autopilot is back from its reboot with PLND_ENABLED 1, PLND_TYPE 1"
+    wait_for(lambda: any(t.startswith(back) for t in events(client, "param")), 30)
+    ready = "the autopilot has its position estimate again: ready to fly"
+    wait_for(lambda: any(t.startswith(ready) for t in events(client, "param")), 60)
+    assert client.get("/api/telemetry").json()["boots"] == boots + 1
 
 
 def test_mission_defaults_are_those_of_the_requests(client):

@@ -588,3 +588,63 @@ def test_external_navigation_arguments_are_checked_before_sending(peer: Any, mak
     assert len(peer.messages("VISION_POSITION_ESTIMATE")) == before
     assert not [m for m in peer.messages("COMMAND_LONG") if m.command == 42007]
     assert link.vision_positions_sent == 0
+
+
+def test_stale_position_is_dropped_and_a_reboot_resets_the_vehicle_fields(
+    peer: Any, make_link
+) -> None:
+    link = make_link(f"tcp:127.0.0.1:{peer.port}")
+    assert _up(link)
+    peer.custom_mode = 4
+    peer.armed = True
+    peer.send(mavlink2.MAVLink_ekf_status_report_message(831, 0.1, 0.1, 0.1, 0.1, 0.0))
+    peer.send(mavlink2.MAVLink_attitude_message(60_000, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0))
+    peer.send(mavlink2.MAVLink_local_position_ned_message(60_000, 1.0, 2.0, -5.0, 0, 0, 0))
+    assert link.wait_until(lambda t: t.position_ready and t.armed and t.mode == "GUIDED", 3.0)
+    beats = link.telemetry.heartbeats
+    assert link.wait_until(lambda t: t.heartbeats > beats, 3.0)
+    # the vehicle's clock goes on, LOCAL_POSITION_NED does not: the position is dropped
+    peer.send(mavlink2.MAVLink_attitude_message(61_000, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0))
+    assert link.wait_until(lambda t: t.vehicle_time_boot_ms == 61_000, 3.0)
+    assert link.telemetry.position_ned is not None  # 1 s: not stale yet
+    peer.send(mavlink2.MAVLink_attitude_message(61_600, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0))
+    assert link.wait_until(lambda t: t.position_stale, 3.0)
+    t = link.telemetry
+    assert t.position_ned is None and t.velocity_ned is None and not t.position_ready
+    peer.send(mavlink2.MAVLink_local_position_ned_message(61_700, 1.0, 2.0, -5.0, 0, 0, 0))
+    assert link.wait_until(lambda t: t.position_ned is not None and not t.position_stale, 3.0)
+    # a reboot: the clock goes back; nothing from before it is kept
+    peer.heartbeats = False
+    peer.armed = False
+    peer.custom_mode = 0
+    peer.send(mavlink2.MAVLink_attitude_message(900, 0.0, 0.0, 0.2, 0.0, 0.0, 0.0))
+    assert link.wait_until(lambda t: t.boots == 1, 3.0)
+    t = link.telemetry
+    assert t.vehicle_time_boot_ms == 900 and t.position_ned is None and t.ekf is None
+    assert t.mode is None and not t.armed and t.attitude is not None  # the new ATTITUDE
+    assert link.latest("LOCAL_POSITION_NED") is None and link.latest("ATTITUDE") is not None
+    assert t.state.value == "up"
+    peer.heartbeats = True
+    assert link.wait_until(lambda t: t.mode == "STABILIZE", 3.0)
+
+
+def test_statustexts_and_heartbeats_are_counted(peer: Any, make_link) -> None:
+    link = make_link(f"tcp:127.0.0.1:{peer.port}")
+    assert _up(link)
+    for i in range(60):
+        peer.statustext(f"text {i}", mavlink2.MAV_SEVERITY_INFO)
+    assert link.wait_until(lambda t: t.statustexts_received == 60, 3.0)
+    t = link.telemetry
+    assert len(t.statustexts) == 50 and t.statustexts[-1].text == "text 59"
+    assert t.heartbeats >= 1
+
+
+def test_set_yaw_sends_condition_yaw_absolute_shortest_way(peer: Any, make_link) -> None:
+    link = make_link(f"tcp:127.0.0.1:{peer.port}")
+    assert _up(link)
+    result = link.set_yaw(-30.0, rate_dps=10.0)
+    assert result.ok, result.detail
+    sent = peer.wait_for("COMMAND_LONG", 3.0, lambda m: m.command == mavlink2.MAV_CMD_CONDITION_YAW)
+    assert (sent.param1, sent.param2, sent.param3, sent.param4) == (330.0, 10.0, 0.0, 0.0)
+    assert link.set_yaw(10.0, rate_dps=-1).result_name == "INVALID_ARGUMENT"
+    assert link.set_yaw(math.nan).result_name == "INVALID_ARGUMENT"

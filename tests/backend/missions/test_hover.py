@@ -33,9 +33,11 @@ def test_takes_off_flies_over_the_pad_and_centres_on_it():
         )
         fly(driver, mission, camera_config(spec))
         assert mission.outcome == "completed", mission.record.message
-        assert changes == ["takeoff", "transit", "hold", "completed"]
+        assert changes == ["preflight", "takeoff", "transit", "hold", "completed"]
         rec = mission.record
-        assert rec.frames > 50 and rec.detections > 0.5 * rec.frames
+        # frames count from the start: ~2 s on the ground (GUIDED, arming, each confirmed
+        # by a heartbeat) and the climb see no pad
+        assert rec.frames > 50 and rec.detections > 0.4 * rec.frames
         truth = driver.server.truth()
         assert truth.armed and truth.mode == 4  # left hovering in GUIDED
         n, e, d = truth.position_ned
