@@ -72,6 +72,7 @@ def telemetry(north: float, east: float, alt: float = 4.0) -> Telemetry:
         position_ned=Vec3(north, east, -alt),
         velocity_ned=Vec3(0.0, 0.0, 0.0),
         gps=GpsStatus(6, 12, 0.8),
+        state_confirmed=True,  # a HEARTBEAT since the last accepted command
     )
 
 
