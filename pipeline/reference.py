@@ -23,7 +23,7 @@ from pipeline.template import reference_pyramid
 
 H_CORNERS = 12
 RELIABLE_H_PX = 28.0  # an H this many pixels across is found in nearly every frame
-SEARCH_WIDTH_PX = 640  # frames are searched at most this wide (pipeline.frame)
+SEARCH_WIDTH_PX = 640  # frames are searched this wide first (pipeline.frame)
 # OpenCV's warps (the frames' template check) take pictures under 32767 px a side.
 MAX_SIDE_PX = 16384
 _WORK_MAX = 1024  # pictures are measured at up to this many pixels a side
