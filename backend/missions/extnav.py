@@ -189,18 +189,10 @@ class ExtNavLandMission(LandMission):
         super()._s_check(now, tel)
 
     def _s_align(self, now: float, tel: Telemetry) -> None:
-        c = self.config
-        fix = self._take_new_fix()
-        if fix is None:
-            self._no_fix(now, tel)
+        step = self._centre_over_pad(now, tel)
+        if step is None:
             return
-        height = self._height(tel) or fix.height_m
-        vd = 0.0
-        if height > c.approach_alt_m + 0.5:
-            vd = min(c.descent_speed_mps, 0.5 * (height - c.approach_alt_m))
-        self._send_velocity(*self._steer(fix, vd))
-        centred = self._centred(fix, c.align_tolerance_m)
-        self._centred_count = self._centred_count + 1 if centred else 0
+        _, vd, centred = step
         if centred and vd == 0.0 and self.pad_est is not None:
             self._pad_samples.append(self.pad_est)
         if not centred:

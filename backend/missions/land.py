@@ -22,6 +22,7 @@ import math
 from typing import Any
 
 from backend.link import Telemetry
+from backend.missions.geometry import PadFix
 from backend.missions.mission import Mission
 
 #: Consecutive centred fixes before descending (one lucky frame is not alignment).
@@ -150,12 +151,14 @@ class LandMission(Mission):
             if there and now - self.state_since > 2.0 and self._unseen_s() > c.lost_timeout_s:
                 self._start_search(tel, "the pad is not in view where it should be")
 
-    def _s_align(self, now: float, tel: Telemetry) -> None:
+    def _centre_over_pad(self, now: float, tel: Telemetry) -> tuple[PadFix, float, bool] | None:
+        """One step of centring and turning over the pad on a new fix: (the fix, the
+        descent speed sent, whether it is centred); None without a new fix."""
         c = self.config
         fix = self._take_new_fix()
         if fix is None:
             self._no_fix(now, tel)
-            return
+            return None
         height = self._height(tel) or fix.height_m
         # Too high to see the pad reliably: come down to the approach height meanwhile.
         vd = 0.0
@@ -164,6 +167,14 @@ class LandMission(Mission):
         self._send_velocity(*self._steer(fix, vd))
         centred = self._centred(fix, c.align_tolerance_m)
         self._centred_count = self._centred_count + 1 if centred else 0
+        return fix, vd, centred
+
+    def _s_align(self, now: float, tel: Telemetry) -> None:
+        c = self.config
+        step = self._centre_over_pad(now, tel)
+        if step is None:
+            return
+        fix, vd, _ = step
         if self._centred_count >= CENTRED_FIXES and vd == 0.0:
             self._centred_count = 0
             if c.strategy == "plnd":
