@@ -1,10 +1,9 @@
 // The live local-frame map: top-down, north up, metres from home: home, the pad (its
 // place, size and heading), the vehicle and its track, the camera's footprint.
 
-import { cameraFootprint } from "../lib/footprint";
 import { readTelemetry } from "../lib/telemetry";
 import { type Ctx, fitCanvas, h, panel, rafThrottle, setText } from "./dom";
-import { drawTopDown, type LocalScene } from "./map-draw";
+import { drawTopDown, liveScene } from "./map-draw";
 
 const TRACK_POINTS = 600;
 
@@ -27,21 +26,9 @@ export function mountLocalMap(root: HTMLElement, ctx: Ctx): void {
   const draw = rafThrottle(() => {
     const g = fitCanvas(canvas);
     if (!g) return;
-    const s = store.settings as Record<string, unknown>;
     const t = store.telemetry;
-    const p = t?.position_ned;
-    const a = t?.attitude;
-    const vehicle = p && p.x !== null && p.y !== null && p.z !== null ? { n: p.x, e: p.y, d: p.z, yaw: a?.yaw ?? 0 } : null;
-    const footprint =
-      vehicle && a && a.roll !== null && a.pitch !== null && a.yaw !== null
-        ? cameraFootprint([vehicle.n, vehicle.e, vehicle.d], a.roll, a.pitch, a.yaw, Number(s.camera_hfov_deg ?? 60), Number(s.camera_aspect ?? 4 / 3))
-        : null;
-    const scene: LocalScene = {
-      pad: { n: Number(s.pad_north_m ?? 0), e: Number(s.pad_east_m ?? 0), size: Number(s.pad_size_m ?? 0.55), headingDeg: Number(s.pad_heading_deg ?? 0) },
-      vehicle,
-      track,
-      footprint,
-    };
+    const scene = liveScene(store, track);
+    const vehicle = scene.vehicle;
     drawTopDown(g, canvas.clientWidth, canvas.clientHeight, scene);
     if (vehicle) {
       const v = readTelemetry(t);

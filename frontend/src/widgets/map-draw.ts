@@ -1,6 +1,8 @@
 // Drawing the local frame (metres from home, north up): a top-down map and a simple
 // perspective view of the same scene, for the live map and the replay.
 
+import { cameraFootprint } from "../lib/footprint";
+import type { Store } from "../lib/store";
 import { COLORS } from "./dom";
 
 export interface LocalScene {
@@ -8,6 +10,21 @@ export interface LocalScene {
   vehicle: { n: number; e: number; d: number; yaw: number } | null;
   track: [number, number, number][];
   footprint: [number, number][] | null;
+}
+
+/** The live scene: the pad from the settings, the vehicle and its camera's footprint
+ * from the latest telemetry, and the given track. */
+export function liveScene(store: Store, track: [number, number, number][]): LocalScene {
+  const s = store.settings;
+  const p = store.telemetry?.position_ned;
+  const a = store.telemetry?.attitude;
+  const vehicle = p && p.x !== null && p.y !== null && p.z !== null ? { n: p.x, e: p.y, d: p.z, yaw: a?.yaw ?? 0 } : null;
+  const footprint =
+    vehicle && a && a.roll !== null && a.pitch !== null && a.yaw !== null
+      ? cameraFootprint([vehicle.n, vehicle.e, vehicle.d], a.roll, a.pitch, a.yaw, Number(s.camera_hfov_deg ?? 60), Number(s.camera_aspect ?? 4 / 3))
+      : null;
+  const pad = { n: Number(s.pad_north_m ?? 0), e: Number(s.pad_east_m ?? 0), size: Number(s.pad_size_m ?? 0.55), headingDeg: Number(s.pad_heading_deg ?? 0) };
+  return { pad, vehicle, track, footprint };
 }
 
 function padCorners(pad: LocalScene["pad"]): [number, number][] {

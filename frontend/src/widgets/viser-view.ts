@@ -3,9 +3,8 @@
 // keeps the camera view at full rate; and viser's full 3D scene (the pad's picture,
 // the camera frustums), embedded on demand or opened alone. Each with its legend.
 
-import { cameraFootprint } from "../lib/footprint";
 import { type Ctx, fitCanvas, h, panel, rafThrottle, setText } from "./dom";
-import { drawPerspective, type LocalScene } from "./map-draw";
+import { drawPerspective, type LocalScene, liveScene } from "./map-draw";
 
 const TRACK_POINTS = 600;
 
@@ -60,17 +59,8 @@ export function mountViserView(root: HTMLElement, ctx: Ctx): { open(): void } {
   const draw = rafThrottle(() => {
     const g = fitCanvas(canvas);
     if (!g) return;
-    const s = store.settings as Record<string, unknown>;
-    const t = store.telemetry;
-    const p = t?.position_ned;
-    const a = t?.attitude;
-    const vehicle = p && p.x !== null && p.y !== null && p.z !== null ? { n: p.x, e: p.y, d: p.z, yaw: a?.yaw ?? 0 } : null;
-    const footprint =
-      vehicle && a && a.roll !== null && a.pitch !== null && a.yaw !== null
-        ? cameraFootprint([vehicle.n, vehicle.e, vehicle.d], a.roll, a.pitch, a.yaw, Number(s.camera_hfov_deg ?? 60), Number(s.camera_aspect ?? 4 / 3))
-        : null;
-    const pad = { n: Number(s.pad_north_m ?? 0), e: Number(s.pad_east_m ?? 0), size: Number(s.pad_size_m ?? 0.55), headingDeg: Number(s.pad_heading_deg ?? 0) };
-    const scene: LocalScene = { pad, vehicle, track, footprint };
+    const scene = liveScene(store, track);
+    const { pad, vehicle } = scene;
     const w = canvas.clientWidth;
     const hgt = canvas.clientHeight;
     drawPerspective(g, w, hgt, scene, az, el);
