@@ -251,23 +251,17 @@ class ParamService:
         ]
         for axis, offset in zip("XYZ", self._camera_offset, strict=True):
             wanted.append((f"PLND_CAM_POS_{axis}", offset))
-        writes: list[Write] = []
-        for name, value in wanted:
-            try:
-                write = self.write(name, value, why=why)
-            except UnknownParam:
-                continue  # older firmware without it (e.g. PLND_ORIENT before 4.2)
-            writes.append(write)
-            if not write.result.ok:
-                return {
-                    "ok": False,
-                    "lag_s": lag,
-                    "latency_ms": latency,
-                    "writes": [w.to_dict() for w in writes],
-                    "reboot": None,
-                    "detail": f"The vehicle refused {name}: {write.result.detail}; "
-                    "nothing more was written and no reboot was sent.",
-                }
+        # older firmware may lack one (e.g. PLND_ORIENT before 4.2): skipped
+        writes, refused = self._write_all(wanted, why, skip_unknown=True)
+        if refused:
+            return {
+                "ok": False,
+                "lag_s": lag,
+                "latency_ms": latency,
+                "writes": [w.to_dict() for w in writes],
+                "reboot": None,
+                "detail": refused,
+            }
         boots = self._link.telemetry.boots
         reboot = self.reboot(why=why)
         measured = "none measured yet" if latency is None else f"measured {latency:.0f} ms"
@@ -319,20 +313,16 @@ class ParamService:
             mask = int(checks)
             mask = ARMING_CHECK_ALL_BUT_VISION if mask & 1 else mask & ~ARMING_CHECK_VISION
             wanted.append(("ARMING_CHECK", float(mask)))
-        writes: list[Write] = []
-        for name, value in wanted:
-            write = self.write(name, value, why=why)
-            writes.append(write)
-            if not write.result.ok:
-                return {
-                    "ok": False,
-                    "delay_ms": delay,
-                    "latency_ms": latency,
-                    "writes": [w.to_dict() for w in writes],
-                    "reboot": None,
-                    "detail": f"The vehicle refused {name}: {write.result.detail}; "
-                    "nothing more was written and no reboot was sent.",
-                }
+        writes, refused = self._write_all(wanted, why)
+        if refused:
+            return {
+                "ok": False,
+                "delay_ms": delay,
+                "latency_ms": latency,
+                "writes": [w.to_dict() for w in writes],
+                "reboot": None,
+                "detail": refused,
+            }
         reboot = self.reboot(why=why)
         measured = "none measured yet" if latency is None else f"measured {latency:.0f} ms"
         detail = (
@@ -385,6 +375,27 @@ class ParamService:
             )
             ready = False
         self._events.emit("param", text, {"reboot": True, "ready": ready})
+
+    def _write_all(
+        self, wanted: list[tuple[str, float]], why: str, *, skip_unknown: bool = False
+    ) -> tuple[list[Write], str]:
+        """Write each (name, value) in turn; stops at the first the vehicle refuses.
+        Returns the writes made and, on a refusal, the sentence that says so ("" else)."""
+        writes: list[Write] = []
+        for name, value in wanted:
+            try:
+                write = self.write(name, value, why=why)
+            except UnknownParam:
+                if skip_unknown:
+                    continue
+                raise
+            writes.append(write)
+            if not write.result.ok:
+                return writes, (
+                    f"The vehicle refused {name}: {write.result.detail}; "
+                    "nothing more was written and no reboot was sent."
+                )
+        return writes, ""
 
     def _log(self, write: Write, why: str) -> None:
         old = "unknown" if write.old is None else f"{write.old:g}"
