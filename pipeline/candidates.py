@@ -147,7 +147,11 @@ def blob_separation(
     A painted H is uniform on a uniform board; an H-ish blob of grass or sensor
     noise has more of the same around it. The band starts a pixel out (past the
     blurred edge) and is a stroke wide; ``board_only`` (frame pixels, N x 2 ->
-    bool) keeps the band's pixels that are board.
+    bool) keeps the band's pixels that are board. A shadow's edge or sun glare
+    across the pad spreads both sides' levels over the whole H, though each part
+    of the H still stands out from the board beside it: the separation is also
+    taken per quadrant around the region's centre, and the better of the whole's
+    and the quadrants' median counts.
     """
     c = region.contour.reshape(-1, 1, 2).astype(np.int32)
     x, y, w, h = cv2.boundingRect(c)
@@ -169,7 +173,23 @@ def blob_separation(
         ys, xs = np.nonzero(band_mask)
         keep = board_only(np.column_stack([xs + x0, ys + y0]).astype(np.float64))
         band_mask[ys[~keep], xs[~keep]] = False
-    inside, band = patch[core > 0], patch[band_mask]
+    inside = core > 0
+    whole = _separation(patch[inside], patch[band_mask])
+    cx, cy = region.contour.mean(axis=0) - np.array([x0, y0])
+    left = np.arange(patch.shape[1])[None, :] < cx
+    top = np.arange(patch.shape[0])[:, None] < cy
+    parts = []
+    for q in (left & top, ~left & top, left & ~top, ~left & ~top):
+        v = _separation(patch[inside & q], patch[band_mask & q])
+        if math.isfinite(v):
+            parts.append(v)
+    if len(parts) < 3:
+        return whole
+    local = float(np.median(parts))
+    return local if not whole >= local else whole
+
+
+def _separation(inside: np.ndarray, band: np.ndarray) -> float:
     if len(inside) < 4 or len(band) < 4:
         return math.nan
     pooled = math.sqrt(0.5 * (float(inside.var()) + float(band.var())))
