@@ -36,6 +36,7 @@ CONFIDENT_SUPPORT = 0.9  # a fit this good is not tried from another start
 # up; H-ish blobs of grass or sensor noise stay under 1.4 (measured on the
 # shared real photos and the bench's floors).
 MIN_EVIDENCE = 1.45
+MIN_FRAMED_EVIDENCE = 1.2  # enough with the rest of the pad found around the H (find._check)
 MIN_BLOB_SEPARATION = 3.0  # the region against the band around it, in pooled std devs
 FINE_TRACE_BELOW_PX = 4000.0  # H's smaller than this are traced on a finer grid
 FINE_FACTOR = 4

@@ -19,6 +19,7 @@ from pipeline.camera import Camera
 from pipeline.candidates import (
     MIN_BLOB_SEPARATION,
     MIN_EVIDENCE,
+    MIN_FRAMED_EVIDENCE,
     MIN_H_AREA_PX,
     Located,
     blob_separation,
@@ -145,10 +146,16 @@ def _check(
         stroke,
         lambda px: ~reference.is_paint(apply_h(H_inv, px)),
     )
-    if hit.evidence < MIN_EVIDENCE or not blob >= MIN_BLOB_SEPARATION:
+    if hit.evidence < MIN_FRAMED_EVIDENCE or not blob >= MIN_BLOB_SEPARATION:
         return "unclear"
     span = float(np.ptp(hit.corners, axis=0).max())
-    if span < SMALL_H_PX and whole_pad(hit.fit.H, reference, binary.smooth) is hit.fit.H:
+    if hit.evidence < MIN_EVIDENCE:
+        # Strokes of 2 px or a motion blur leave an H's own evidence short of
+        # MIN_EVIDENCE; it still counts when the rest of its pad is found around it
+        # (which a look-alike mark on the floor has not).
+        if whole_pad(hit.fit.H, reference, binary.smooth, any_size=True) is hit.fit.H:
+            return "unclear"
+    elif span < SMALL_H_PX and whole_pad(hit.fit.H, reference, binary.smooth) is hit.fit.H:
         # A few pixels of H-shaped texture are everywhere: so small, the H is the
         # pad's only where the rest of the pad (its rim, bars, rings) is found too.
         return "unframed"

@@ -109,7 +109,9 @@ def _covers(found: View, need: View) -> bool:
     return inside and found.scale >= need.scale - 1e-9
 
 
-def whole_pad(H: np.ndarray, reference: Reference, smooth: np.ndarray) -> np.ndarray:
+def whole_pad(
+    H: np.ndarray, reference: Reference, smooth: np.ndarray, *, any_size: bool = False
+) -> np.ndarray:
     """The homography refitted on the edges of the whole pad, when they are found.
 
     The H alone pins the plane's tilt poorly: its corners, a few tens of pixels
@@ -117,12 +119,13 @@ def whole_pad(H: np.ndarray, reference: Reference, smooth: np.ndarray) -> np.nda
     (a ring, a rim, bars) lie farther out; seen from the H's homography they may
     be several pixels off, so they are searched for widely first. Kept when
     most of the marks' edges are found and it still puts the H where it was.
-    An H over ``SELF_SUFFICIENT_PX`` pins the pose by itself. Returns ``H``
-    itself (the same object) when the marks were not found or not looked for.
+    An H over ``SELF_SUFFICIENT_PX`` pins the pose by itself (its marks are then
+    looked for only with ``any_size``: to tell whether they are there). Returns
+    ``H`` itself (the same object) when the marks were not found or not looked for.
     """
     model = reference.marks_model
     span = float(np.ptp(apply_h(H, reference.corners_m), axis=0).max())
-    if model is None or span > SELF_SUFFICIENT_PX:
+    if model is None or (span > SELF_SUFFICIENT_PX and not any_size):
         return H
     img = smooth.astype(np.float32)
     fit = fit_homography(
