@@ -79,14 +79,23 @@ class LockstepLink:
         for: a dropped link is a scenario, not an error); raises :class:`LockstepError`
         when an up link is mute.
         """
-        if self.link.telemetry.state != LinkState.UP or self.server.rebooting:
+        if self._gone():
             return False  # nothing to wait for (a rebooting vehicle answers nothing)
         if self.pump(self.link.get_param, SYNC_PARAM, timeout=CALL_TIMEOUT_S / 2) is None:
-            if self.link.telemetry.state != LinkState.UP:
+            if self._gone():
                 return False
             raise LockstepError("the stand-in did not answer the sync parameter read")
         self.syncs += 1
         return True
+
+    def _gone(self) -> bool:
+        """The link is down, the vehicle rebooting, or the stand-in stopped (its link's
+        reader may not have seen the socket close yet on a loaded machine)."""
+        return (
+            self.link.telemetry.state != LinkState.UP
+            or self.server.rebooting
+            or not self.server.running
+        )
 
     # --- acknowledged: pumped ------------------------------------------------------------------
     def set_mode(self, name: str) -> CommandResult:

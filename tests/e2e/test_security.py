@@ -167,7 +167,6 @@ def test_the_token_is_in_no_url_response_or_log_line(browser, station: Served) -
 
 
 EVIL_PAGE = """<!doctype html><title>evil</title><body>
-<img id="img" src="{station}/api/references">
 <iframe id="dash" src="{station}/"></iframe>
 <iframe id="view" src="{station}/view3d/"></iframe>
 <script>
@@ -185,8 +184,13 @@ for (const [key, url, protocols] of [
   s.onmessage = () => {{ n += 1; }};
   s.onclose = (e) => done(key, "closed " + e.code + " after " + n + " messages");
 }}
-document.getElementById("img").onerror = () => done("img", "error");
-document.getElementById("img").onload = () => done("img", "loaded");
+// The picture's handlers are set before its source: a refusal that comes back before
+// a script after an <img> tag runs would leave its event unheard.
+const img = new Image();
+img.onerror = () => done("img", "error");
+img.onload = () => done("img", "loaded");
+img.src = "{station}/api/references";
+document.body.appendChild(img);
 </script></body>"""
 
 

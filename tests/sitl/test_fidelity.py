@@ -205,7 +205,11 @@ def _externalnav(f: Flight) -> VisionStandIn:
     refused = f.link.arm()
     assert not refused.ok and "Arm: VisOdom: not healthy" in refused.reasons
     vision = VisionStandIn(f.obs, f.origin()).start()
-    f.wait_sim(2.0)
+    # ArduCopter says when its pre-arm checks pass (SYS_STATUS): with vision flowing, on
+    # a loaded machine that may take longer than a fixed wait
+    if not f.wait_until(lambda t: t.prearm_ok, 30.0):
+        vision.close()
+        pytest.fail("the pre-arm checks never passed with the vision stand-in's estimates")
     return vision
 
 

@@ -10,7 +10,15 @@ from __future__ import annotations
 import pytest
 
 from backend.missions import LandConfig, LandMission
-from bench.scenarios.land import PAD_NE, LockstepDriver, RunSpec, fly_to_start, run_one
+from bench.scenarios.land import (
+    PAD_NE,
+    LockstepDriver,
+    RunSpec,
+    camera_config,
+    fly,
+    fly_to_start,
+    run_one,
+)
 
 pytestmark = pytest.mark.slow
 
@@ -180,6 +188,37 @@ def test_plnd_refuses_when_precision_landing_is_off_and_says_what_to_set():
         assert "PLND_ENABLED = 1" in text and "PLND_TYPE = 1" in text and "reboot" in text
     finally:
         driver.close()
+
+
+def test_plnd_set_by_another_gcs_without_the_reboot_is_reported_as_a_blind_landing():
+    # Another ground station set PLND_ENABLED and PLND_TYPE, without the reboot PLND_TYPE
+    # needs: the station cannot know, sends its targets, and the vehicle (no backend:
+    # "PrecLand: Failsafe Measures") lands where it is. Never a precision landing.
+    s = spec("plnd")
+    driver = _ready_driver(precland=False)
+    try:
+        driver.server.sim.param_set("PLND_ENABLED", 1)
+        driver.server.sim.param_set("PLND_TYPE", 1)
+        config = LandConfig(
+            strategy="plnd",
+            pad_north_m=PAD_NE[0],
+            pad_east_m=PAD_NE[1],
+            pad_heading_deg=s.pad_heading_deg,
+        )
+        mission = LandMission(
+            driver.link, config, now=driver.now(), touchdown_truth=driver.touchdown
+        )
+        fly(driver, mission, camera_config(s))
+    finally:
+        driver.close()
+    rec = mission.record
+    assert mission.outcome == "landed_blind", (rec.message, rec.states)
+    assert rec.precland == "failsafe"
+    assert rec.precland_texts[0] == "PrecLand: Failsafe Measures"
+    assert "PrecLand: Target Found" not in rec.precland_texts
+    assert rec.message.startswith("landed blind, not a precision landing")
+    assert rec.targets_sent > 0  # the targets went out: the vehicle ignored them
+    assert rec.to_dict()["outcome"] == "landed_blind"
 
 
 def test_refuses_on_the_ground():
