@@ -187,7 +187,7 @@ def blob_separation(
     if len(parts) < 3:
         return whole
     local = float(np.median(parts))
-    return local if not whole >= local else whole
+    return whole if whole >= local else local  # (a nan whole: the quadrants')
 
 
 def _separation(inside: np.ndarray, band: np.ndarray) -> float:
