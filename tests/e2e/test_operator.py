@@ -341,6 +341,9 @@ def test_battery_low_and_failsafe_alerts_sound_until_acknowledged(page, station)
     screenshot(page, "alerts-battery")
     for alert in (low, failsafe):
         alert.get_by_test_id("alert-ack").click()
+        # each one gone before the next is clicked (the list re-renders; a loaded
+        # machine may take its time)
+        expect(alert).to_have_count(0, timeout=30_000)
     expect(page.get_by_test_id("alert").filter(has_text="Battery")).to_have_count(0)
     page.wait_for_function("!window.visland.alarm.sounding")
     # back to the vehicle's own threshold
