@@ -66,6 +66,10 @@ CREATE TABLE IF NOT EXISTS settings (
 """
 
 
+class StorageClosed(RuntimeError):
+    """A write after the station closed its database (it is the last part to stop)."""
+
+
 class Storage:
     """The station's database at ``path`` (created with its folder when missing)."""
 
@@ -73,6 +77,7 @@ class Storage:
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._lock = threading.Lock()
+        self._closed = False
         self._db = sqlite3.connect(
             self.path, check_same_thread=False, isolation_level=None, timeout=5.0
         )
@@ -111,6 +116,7 @@ class Storage:
 
     def close(self) -> None:
         with self._lock:
+            self._closed = True
             self._db.close()
 
     # --- references ----------------------------------------------------------------------
@@ -284,7 +290,10 @@ class Storage:
 
     # --- events --------------------------------------------------------------------------
     def add_event(self, kind: str, text: str, data: dict | None = None, t: float | None = None):
+        """Store an event; :class:`StorageClosed` once the station closed the database."""
         with self._lock:
+            if self._closed:
+                raise StorageClosed(f"{self.path} is closed")
             self._db.execute(
                 "INSERT INTO events (t, kind, text, data) VALUES (?, ?, ?, ?)",
                 (time.time() if t is None else t, kind, text, json.dumps(data or {}, default=str)),

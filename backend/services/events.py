@@ -15,7 +15,7 @@ from collections import deque
 from collections.abc import Callable
 from typing import Any
 
-from backend.storage import Storage
+from backend.storage import Storage, StorageClosed
 
 log = logging.getLogger(__name__)
 
@@ -75,6 +75,10 @@ class EventLog:
         if self._storage is not None:
             try:
                 self._storage.add_event(kind, text, data, t)
+            except StorageClosed:
+                # A part's last words while the station stops (a link's thread that
+                # outlived its join timeout on a loaded machine): kept in the log.
+                log.warning("event after the database closed, not stored: %s: %s", kind, text)
             except Exception:
                 log.exception("could not store an event")
         with self._lock:

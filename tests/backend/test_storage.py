@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import logging
 import sqlite3
 import threading
 
 import pytest
 
-from backend.storage import SCHEMA_VERSION, Storage
+from backend.services.events import EventLog
+from backend.storage import SCHEMA_VERSION, Storage, StorageClosed
 
 
 @pytest.fixture
@@ -112,3 +114,23 @@ def test_wal_and_full_sync_survive_a_power_cut(db):
         con.close()
     # synchronous is per connection: the station's own is FULL (2)
     assert db._db.execute("PRAGMA synchronous").fetchone()[0] == 2
+
+
+def test_an_event_after_the_database_closed_is_logged_not_raised(tmp_path, caplog):
+    # A link's event thread may outlive its join timeout while the station stops, and
+    # emit after the database (the last part to stop) has closed: kept in the log as
+    # a warning with its text, not an error with a traceback, and still passed on.
+    storage = Storage(tmp_path / "v.db")
+    events = EventLog(storage)
+    heard = []
+    events.listen(heard.append)
+    events.emit("link", "link up")
+    storage.close()
+    with pytest.raises(StorageClosed):
+        storage.add_event("link", "after close")
+    with caplog.at_level(logging.WARNING):
+        events.emit("link", "link closed: closed by the ground station")
+    assert [e["text"] for e in heard] == ["link up", "link closed: closed by the ground station"]
+    assert not [r for r in caplog.records if r.levelno >= logging.ERROR or r.exc_info]
+    assert "not stored: link: link closed" in caplog.text
+    assert [e["text"] for e in Storage(tmp_path / "v.db").recent_events()] == ["link up"]
