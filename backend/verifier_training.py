@@ -105,17 +105,27 @@ class VerifierTrainer:
             if self._closing or any(r == ref_id for r, _ in self._pending):
                 return
             current = self._status.get(ref_id)
-            if current is not None and current.state in ("training", "unavailable", "failed"):
+            if current is not None and current.state in (
+                "queued",
+                "training",
+                "unavailable",
+                "failed",
+            ):
+                return
+            self._status[ref_id] = VerifierStatus("queued")
+        # "queued" is told before the training thread can see the request and move it on
+        # (listeners hear the states in the order they happen, on a loaded machine too).
+        self._emit(ref_id)
+        with self._lock:
+            if self._closing:
                 return
             self._pending.append((ref_id, reference))
-            self._status[ref_id] = VerifierStatus("queued")
             if self._thread is None:
                 self._thread = threading.Thread(
                     target=self._run, name="verifier-training", daemon=True
                 )
                 self._thread.start()
             self._wake.notify()
-        self._emit(ref_id)
 
     def close(self, timeout: float = 5.0) -> None:
         """Stop training (the run in progress is abandoned at its next progress step)."""

@@ -52,8 +52,13 @@ def test_the_default_pad_gets_a_verifier_that_is_used_and_kept(tmp_path):
         _wait(lambda: station.references.active_summary()["verifier"]["state"] == "ready", 180)
         assert (tmp_path / "references" / str(ref_id) / "verifier" / "verifier.json").is_file()
         assert station.references.trainer.verifier(ref_id) is not None
-        events = [e["text"] for e in station.events.recent(50)]
-        assert any(f"reference {ref_id}: ready" in text for text in events)
+        # the event follows the state (the trainer's listener tells it just after)
+        _wait(
+            lambda: any(
+                f"reference {ref_id}: ready" in e["text"] for e in station.events.recent(50)
+            ),
+            30,
+        )
         # Frames now go through the verifier before the pose.
         reference = station.references.active.reference
         camera = Camera.from_fov(640, 480, 60.0)

@@ -102,6 +102,24 @@ export function activeAlerts(x: AlertInput): Alert[] {
   return out;
 }
 
+/** Acknowledgements to forget: a condition that ended may alarm again when it comes
+ * back. A battery alert ends only when the battery reads better, never when its reading
+ * is missing for a moment (a telemetry gap is not a charged battery). */
+export function endedAcks(
+  acked: Iterable<string>,
+  activeIds: Set<string>,
+  battery: ReturnType<typeof batteryLevel>["level"],
+): string[] {
+  const out: string[] = [];
+  for (const id of acked) {
+    if (activeIds.has(id)) continue;
+    if (id === "link" || id === "server" || id === "ekf") out.push(id);
+    else if (id === "battery-low" && battery === "ok") out.push(id);
+    else if (id === "battery-critical" && (battery === "ok" || battery === "low")) out.push(id);
+  }
+  return out;
+}
+
 /** Alerts not yet acknowledged (acknowledgements are by id). */
 export function unacknowledged(alerts: Alert[], acked: Set<string>): Alert[] {
   return alerts.filter((a) => !acked.has(a.id));

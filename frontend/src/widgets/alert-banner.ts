@@ -2,7 +2,7 @@
 // a repeating tone while any is unacknowledged and still holds, and an Acknowledge
 // button on each. An alert whose condition ended stays (marked) until acknowledged.
 
-import { activeAlerts, type Alert } from "../lib/alerts";
+import { activeAlerts, type Alert, batteryLevel, endedAcks } from "../lib/alerts";
 import { readTelemetry } from "../lib/telemetry";
 import { type Ctx, h } from "./dom";
 
@@ -57,14 +57,12 @@ export function mountAlertBanner(root: HTMLElement, ctx: Ctx): AlarmState {
     const m = store.status?.mission ?? null;
     const missionKey = m ? `${m.run_id}:${m.outcome}` : null;
     if (missionBaseline === undefined && store.status) missionBaseline = m?.outcome ? missionKey : null;
+    const battery = { batteryV: v.batteryV, batteryPct: v.batteryPct, mahUsed: null, thresholds: store.thresholds };
     const now = activeAlerts({
       linkState: rebooting ? "up" : store.telemetry ? v.linkState : (store.status?.link.state ?? "unknown"),
       serverConnected: !wasOpen || store.connection === "open",
       armed: v.armed,
-      batteryV: v.batteryV,
-      batteryPct: v.batteryPct,
-      mahUsed: null,
-      thresholds: store.thresholds,
+      ...battery,
       ekfHealthy: v.ekfHealthy,
       ekfWasHealthy,
       statustexts: v.statustexts,
@@ -74,8 +72,7 @@ export function mountAlertBanner(root: HTMLElement, ctx: Ctx): AlarmState {
     const activeIds = new Set(now.map((a) => a.id));
     for (const a of now) if (!acked.has(a.id)) shown.set(a.id, { ...a, active: true });
     for (const [id, a] of shown) if (!activeIds.has(id)) a.active = false;
-    // an acknowledged condition that ends may alarm again when it comes back
-    for (const id of [...acked]) if (!activeIds.has(id) && (id === "link" || id === "server" || id === "ekf" || id.startsWith("battery"))) acked.delete(id);
+    for (const id of endedAcks([...acked], activeIds, batteryLevel(battery).level)) acked.delete(id);
     const list = [...shown.values()];
     banner.hidden = list.length === 0;
     alarm.alerts = list.map((a) => ({ id: a.id, title: a.title, active: a.active }));

@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { activeAlerts, type AlertInput, batteryLevel, unacknowledged } from "../../src/lib/alerts";
+import { activeAlerts, type AlertInput, batteryLevel, endedAcks, unacknowledged } from "../../src/lib/alerts";
 
 const quiet: AlertInput = {
   linkState: "up",
@@ -53,5 +53,16 @@ describe("activeAlerts", () => {
   it("leaves acknowledged ones out", () => {
     const all = activeAlerts({ ...quiet, linkState: "lost", thresholds, batteryV: 10.9 });
     expect(unacknowledged(all, new Set(["link"])).map((a) => a.id)).toEqual(["battery-low"]);
+  });
+  it("forgets an acknowledgement only when its condition has really ended", () => {
+    const acked = ["link", "battery-low", "failsafe-1-Battery 1 is low"];
+    // the link is back; the battery's reading is missing for a moment: unknown, not charged
+    expect(endedAcks(acked, new Set(), null)).toEqual(["link"]);
+    expect(endedAcks(acked, new Set(["battery-low"]), "low")).toEqual(["link"]);
+    // charged again (or the threshold lowered): a later low battery alarms anew
+    expect(endedAcks(acked, new Set(), "ok")).toEqual(["link", "battery-low"]);
+    // critical ends when the battery reads only low; a failsafe text stays acknowledged
+    expect(endedAcks(["battery-critical"], new Set(["battery-low"]), "low")).toEqual(["battery-critical"]);
+    expect(endedAcks(["battery-critical"], new Set(), null)).toEqual([]);
   });
 });
