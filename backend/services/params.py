@@ -254,14 +254,7 @@ class ParamService:
         # older firmware may lack one (e.g. PLND_ORIENT before 4.2): skipped
         writes, refused = self._write_all(wanted, why, skip_unknown=True)
         if refused:
-            return {
-                "ok": False,
-                "lag_s": lag,
-                "latency_ms": latency,
-                "writes": [w.to_dict() for w in writes],
-                "reboot": None,
-                "detail": refused,
-            }
+            return _setup_answer(writes, None, refused, lag_s=lag, latency_ms=latency)
         boots = self._link.telemetry.boots
         reboot = self.reboot(why=why)
         measured = "none measured yet" if latency is None else f"measured {latency:.0f} ms"
@@ -279,14 +272,7 @@ class ParamService:
             ).start()
         else:
             detail += f"; the reboot was refused ({reboot.detail}), reboot it before landing."
-        return {
-            "ok": reboot.ok,
-            "lag_s": lag,
-            "latency_ms": latency,
-            "writes": [w.to_dict() for w in writes],
-            "reboot": reboot.to_dict(),
-            "detail": detail,
-        }
+        return _setup_answer(writes, reboot, detail, lag_s=lag, latency_ms=latency)
 
     def setup_extnav(self) -> dict[str, Any]:
         """Write what a GPS-denied landing needs (ArduPilot's ExternalNav fed by this
@@ -315,14 +301,7 @@ class ParamService:
             wanted.append(("ARMING_CHECK", float(mask)))
         writes, refused = self._write_all(wanted, why)
         if refused:
-            return {
-                "ok": False,
-                "delay_ms": delay,
-                "latency_ms": latency,
-                "writes": [w.to_dict() for w in writes],
-                "reboot": None,
-                "detail": refused,
-            }
+            return _setup_answer(writes, None, refused, delay_ms=delay, latency_ms=latency)
         reboot = self.reboot(why=why)
         measured = "none measured yet" if latency is None else f"measured {latency:.0f} ms"
         detail = (
@@ -335,14 +314,7 @@ class ParamService:
             if reboot.ok
             else f"; the reboot was refused ({reboot.detail}), reboot it before landing."
         )
-        return {
-            "ok": reboot.ok,
-            "delay_ms": delay,
-            "latency_ms": latency,
-            "writes": [w.to_dict() for w in writes],
-            "reboot": reboot.to_dict(),
-            "detail": detail,
-        }
+        return _setup_answer(writes, reboot, detail, delay_ms=delay, latency_ms=latency)
 
     def _follow_reboot(self, boots: int, why: str) -> None:
         """Say when the vehicle is back from the set-up's reboot (with the values it
@@ -406,6 +378,20 @@ class ParamService:
         if why:
             text += f" ({why})"
         self._events.emit("param", text, {**write.to_dict(), "why": why})
+
+
+def _setup_answer(
+    writes: list[Write], reboot: CommandResult | None, detail: str, **figures: Any
+) -> dict[str, Any]:
+    """A one-step set-up's answer: ok only once its reboot was accepted (None: a write
+    was refused and nothing was rebooted), its figures, what was written, the reboot."""
+    return {
+        "ok": reboot is not None and reboot.ok,
+        **figures,
+        "writes": [w.to_dict() for w in writes],
+        "reboot": None if reboot is None else reboot.to_dict(),
+        "detail": detail,
+    }
 
 
 def _describe(name: str, value: float, ptype: int) -> dict[str, Any]:
