@@ -199,3 +199,15 @@ def start_flight(kind: str = "sitl") -> tuple[Sitl | StandIn, Flight]:
 
 def horizontal(a: tuple[float, ...], b: tuple[float, ...]) -> float:
     return math.hypot(a[0] - b[0], a[1] - b[1])
+
+
+def assert_landed_blind(mission: Any) -> None:
+    """A plnd landing whose targets ArduCopter ignored (no precision-landing backend:
+    "PrecLand: Failsafe Measures") is reported as a blind landing, never a precise one."""
+    rec = mission.record
+    assert mission.outcome == "landed_blind", (rec.message, rec.states)
+    assert rec.precland == "failsafe"
+    assert rec.precland_texts[0] == "PrecLand: Failsafe Measures"
+    assert "PrecLand: Target Found" not in rec.precland_texts
+    assert rec.message.startswith("landed blind, not a precision landing")
+    assert rec.targets_sent > 0  # the targets went out: the vehicle ignored them

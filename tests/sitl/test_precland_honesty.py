@@ -25,7 +25,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from backend.missions import LandConfig, LandMission
 from bench.scenarios.land import PAD_NE, RunSpec, camera_config, fly, fly_to_start
 from bench.scenarios.observed import ObservedDriver
-from tests.sitl.support import Flight, requires_sitl, start_flight
+from tests.sitl.support import Flight, assert_landed_blind, requires_sitl, start_flight
 
 pytestmark = pytest.mark.slow
 
@@ -92,14 +92,8 @@ def test_plnd_set_without_the_reboot_is_reported_as_a_blind_landing(vehicle: Fli
     driver = _driver(f)
     fly_to_start(driver, SPEC, precland=False)
     mission = _land(driver)
-    rec = mission.record
-    assert mission.outcome == "landed_blind", (rec.message, rec.states)
-    assert rec.precland == "failsafe"
-    assert rec.precland_texts[0] == "PrecLand: Failsafe Measures"
-    assert "PrecLand: Target Found" not in rec.precland_texts
-    assert rec.message.startswith("landed blind, not a precision landing")
-    assert rec.targets_sent > 0  # the targets went out: ArduCopter ignored them
-    stored = rec.to_dict()
+    assert_landed_blind(mission)
+    stored = mission.record.to_dict()
     assert stored["outcome"] == "landed_blind" and stored["precland"] == "failsafe"
 
 
