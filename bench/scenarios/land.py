@@ -17,6 +17,7 @@ import math
 import random
 import statistics
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -412,18 +413,20 @@ def fly(
     camera_hz: float = 20.0,
     hide_pad: Callable[[Any, Mission], bool] | None = None,
     after_step: Callable[[Any, Mission], None] | None = None,
+    latency_s: float | None = None,
 ) -> None:
     """Step ``mission`` until it is done: each tick the clock moves ``1 / camera_hz``, a
-    frame is rendered and processed, and the previous tick's result is handed over (the
-    pipeline's latency). ``hide_pad(driver, mission)`` True: something covers the pad
-    (the frame is the plain ground); ``after_step`` may meddle (tests)."""
+    frame is rendered and processed, and its result is handed over ``latency_s`` later
+    (the pipeline's latency; default the next tick). ``hide_pad(driver, mission)`` True:
+    something covers the pad (the frame is the plain ground); ``after_step`` may meddle
+    (tests)."""
     threads = cv2.getNumThreads()
     if getattr(driver, "deterministic", False):
         # OpenCV's worker threads may sum floats in a different order from run to run;
         # in a closed loop that grows into a different flight. One thread: same flight.
         cv2.setNumThreads(1)
     try:
-        _fly(driver, mission, cam_cfg, camera_hz, hide_pad, after_step)
+        _fly(driver, mission, cam_cfg, camera_hz, latency_s, hide_pad, after_step)
     finally:
         cv2.setNumThreads(threads)
 
@@ -433,6 +436,7 @@ def _fly(
     mission: Mission,
     cam_cfg: SimCameraConfig,
     camera_hz: float,
+    latency_s: float | None,
     hide_pad: Callable[[Any, Mission], bool] | None,
     after_step: Callable[[Any, Mission], None] | None,
 ) -> None:
@@ -441,11 +445,13 @@ def _fly(
     camera = cam_cfg.camera
     reference = _reference()
     dt = 1.0 / camera_hz
-    pending: VisionSample | None = None
+    pending: deque[VisionSample] = deque()
     while not mission.done:
         driver.advance(dt)
         t = driver.now()
-        sample, pending = pending, None
+        sample = None
+        while pending and (latency_s is None or pending[0].t_capture + latency_s <= t + 1e-9):
+            sample = pending.popleft()  # the newest of those ready
         pose = driver.camera_pose(t)
         if pose is not None:
             if hide_pad is not None and hide_pad(driver, mission):
@@ -458,7 +464,7 @@ def _fly(
             att = driver.link.telemetry.attitude
             hint = None if att is None else camera_yaw_hint(cam_cfg.pad_heading_deg, att.yaw)
             result = process_frame(image, reference, camera, yaw_hint=hint)
-            pending = VisionSample(result, camera, t, driver.time_usec())
+            pending.append(VisionSample(result, camera, t, driver.time_usec()))
         mission.step(t, sample)
         if after_step is not None:
             after_step(driver, mission)
@@ -473,6 +479,7 @@ def run_one(
     hide_pad: Callable[[Any, Mission], bool] | None = None,
     after_step: Callable[[Any, Mission], None] | None = None,
     driver: Any = None,
+    latency_s: float | None = None,
 ) -> RunResult:
     """Fly one landing run (take off, reach the start, land by vision) and measure it.
 
@@ -506,6 +513,7 @@ def run_one(
             camera_hz=camera_hz,
             hide_pad=hide_pad,
             after_step=after_step,
+            latency_s=latency_s,
         )
         rec = mission.record
         td = rec.touchdown

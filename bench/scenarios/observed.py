@@ -21,6 +21,7 @@ from typing import Any
 
 from backend.link import DEFAULT_STREAM_RATES_HZ, LinkState, VehicleLink
 from backend.missions import TouchdownTruth
+from backend.missions.mission import vehicle_time_usec
 from sim.camera import VehiclePose
 from sim.sitl import OBSERVER_RATES_HZ, Sitl, SitlObserver
 
@@ -63,6 +64,7 @@ class ObservedDriver:
         self.ground_true_d = 0.0
         self.ground_ekf_d = 0.0
         self.skipped_ticks = 0
+        self._truth_rx: float | None = None
 
     # ---------------------------------------------------------------- the clock
     def connect(self, timeout_s: float = 60.0) -> None:
@@ -128,10 +130,19 @@ class ObservedDriver:
         truth = self.obs.truth()
         if truth is None:
             return None
+        self._truth_rx = truth.rx
         return VehiclePose(truth.position_ned, truth.roll, truth.pitch, truth.yaw, t)
 
     def time_usec(self) -> int | None:
-        ms = self.raw.telemetry.vehicle_time_boot_ms
+        """The last camera pose's moment on the vehicle's clock: the true state's arrival
+        mapped through the link's latest ATTITUDE (a busy machine delays both ports
+        alike), not the clock's latest reading, which a slow render has left behind."""
+        tel = self.raw.telemetry
+        if self._truth_rx is not None:
+            usec = vehicle_time_usec(tel, self._truth_rx)
+            if usec is not None:
+                return usec
+        ms = tel.vehicle_time_boot_ms
         return None if ms is None else max(1, ms * 1000)
 
     def touchdown(self) -> TouchdownTruth | None:

@@ -9,9 +9,11 @@ landing, never a precision-landing success. Then the same with the reboot: ArduC
 announces the targets and the run is a precision landing. Each vehicle is fresh.
 
 The stand-in's side of both is flown in lockstep (simulated time) in
-tests/backend/missions/test_land.py: its real-time flights here stalled to the mission's
-time limit in three full-suite runs on loaded machines (in GUIDED, after its heartbeats
-had paused for 3 s), a bug recorded in the closing notes.
+tests/backend/missions/test_land.py. Its real-time flights here once ran to the mission's
+time limit on loaded machines, chasing the pad in align: each fix was turned by the
+attitude of when it was processed, not of when its frame was taken, and the renderer
+stamped frames late. Both are fixed (`AttitudeHistory`, `ObservedDriver.time_usec`);
+the lockstep test of a slow ground station there fails without the first.
 """
 
 from __future__ import annotations
