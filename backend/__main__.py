@@ -160,12 +160,15 @@ def main(argv: list[str] | None = None) -> int:
             return 2
 
     import uvicorn
+    from threadpoolctl import threadpool_limits
 
     from backend.api.security import install_log_redaction
     from backend.app import SERVER_OPTIONS, create_app
     from backend.viewer3d import browsable_host
 
     logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
+    # The vision's many small matrix products: a BLAS on every core only waits on itself.
+    threadpool_limits(1, user_api="blas")
     prepare_data_dir(settings.data_dir)
     token, token_path = resolve_token(settings)
     install_log_redaction(token)

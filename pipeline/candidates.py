@@ -72,19 +72,19 @@ class Located:
         return self.fit.support + self.candidate.iou
 
 
-def candidates(found: list[Region], reference: Reference) -> list[Candidate]:
-    """Regions whose whitened shape overlaps the reference's H, most alike first."""
-    out = []
+def candidates(
+    found: list[Region], reference: Reference, top: int | None = None
+) -> list[Candidate]:
+    """Regions whose whitened shape overlaps the reference's H, most alike first
+    (the ``top`` most alike)."""
     lo = 0.5 * reference.solidity
-    for r in found:
-        if not lo <= r.solidity <= 0.97:
-            continue
-        if float(np.ptp(r.contour, axis=0).max()) < MIN_H_SPAN_PX:
-            continue
-        hit = reference.shape.match(r.contour, MIN_SHAPE_IOU)
-        if hit is None:
-            continue
-        out.append(Candidate(r, hit.iou, hit.affine))
+    shaped = [
+        r
+        for r in found
+        if lo <= r.solidity <= 0.97 and float(np.ptp(r.contour, axis=0).max()) >= MIN_H_SPAN_PX
+    ]
+    hits = reference.shape.match_many([r.contour for r in shaped], MIN_SHAPE_IOU, top=top)
+    out = [Candidate(r, hit.iou, hit.affine) for r, hit in zip(shaped, hits, strict=True) if hit]
     out.sort(key=lambda c: -c.iou)
     return out
 
@@ -92,7 +92,7 @@ def candidates(found: list[Region], reference: Reference) -> list[Candidate]:
 def locate_all(found: list[Region], binary: Binarized, reference: Reference) -> Iterator[Located]:
     """Located H's among the regions, best shape first (at most ``MAX_LOCATED`` tried)."""
     smooth = binary.smooth.astype(np.float32)
-    for cand in candidates(found, reference)[:MAX_LOCATED]:
+    for cand in candidates(found, reference, MAX_LOCATED):
         located = locate(cand, binary, reference, smooth)
         if located is not None:
             yield located

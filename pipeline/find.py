@@ -97,6 +97,7 @@ def find(
     tally: Tally,
     stages: Stages,
     tracking: bool = False,
+    enlarged: float = 1.0,
 ) -> tuple[Located, Binarized] | tuple[None, Binarized]:
     """The pad's H in a view's image (BGR), with the view's binarized channel.
 
@@ -104,6 +105,8 @@ def find(
     found there that is clearly an H is the pad (a look-alike does not take
     its place between two frames), so the comparisons with the reference
     picture, there to turn down look-alikes at first sight, are skipped.
+    ``enlarged``: how many view pixels a frame pixel became (an interpolated
+    view holds no more detail: an H's size counts in the frame's pixels).
     """
     projection = reference.projection
     dark = projection.is_gray and projection.polarity == "dark"
@@ -116,7 +119,7 @@ def find(
     for hit in locate_all(found, binary, reference):
         tally.located += 1
         stages.lap("corners")
-        verdict = _check(hit, image, binary, reference, full=not tracking)
+        verdict = _check(hit, image, binary, reference, full=not tracking, enlarged=enlarged)
         stages.lap("check")
         if verdict:
             setattr(tally, verdict, getattr(tally, verdict) + 1)
@@ -134,7 +137,13 @@ def find(
 
 
 def _check(
-    hit: Located, image: np.ndarray, binary: Binarized, reference: Reference, *, full: bool
+    hit: Located,
+    image: np.ndarray,
+    binary: Binarized,
+    reference: Reference,
+    *,
+    full: bool,
+    enlarged: float = 1.0,
 ) -> str:
     """The name of the failed check (a ``Tally`` field), or "" when the H passes;
     without ``full``, only whether it is clearly an H on a plain board."""
@@ -148,7 +157,7 @@ def _check(
     )
     if hit.evidence < MIN_FRAMED_EVIDENCE or not blob >= MIN_BLOB_SEPARATION:
         return "unclear"
-    span = float(np.ptp(hit.corners, axis=0).max())
+    span = float(np.ptp(hit.corners, axis=0).max()) / enlarged
     if hit.evidence < MIN_EVIDENCE:
         # Strokes of 2 px or a motion blur leave an H's own evidence short of
         # MIN_EVIDENCE; it still counts when the rest of its pad is found around it

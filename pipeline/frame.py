@@ -3,9 +3,10 @@
 Where the pipeline looks: when the caller hands in the last result (``prior``),
 first a window around where the pad was, at a resolution where the H spans
 about ``TRACK_SPAN_PX``; when that finds nothing, the whole frame at a
-working width of ``SEARCH_WIDTH_PX``, and a wider frame at its own resolution
-last (a far pad is too small at the working width). Whatever finds the H (``pipeline.find``),
-the pad is then measured at the frame's own resolution around it
+working width of ``SEARCH_WIDTH_PX``, and last at ``FAR_SEARCH_WIDTH_PX`` or the
+frame's own resolution if finer (a far pad is too small at the working width).
+Whatever finds the H (``pipeline.find``), the pad is then measured at the
+frame's own resolution around it, or on the enlarged view that found it
 (``pipeline.measure``). The result says which way found it.
 """
 
@@ -26,10 +27,11 @@ from pipeline.pose import pick_by_yaw, to_pose
 from pipeline.preprocess import DEFAULT_METHOD, METHODS, check_image
 from pipeline.reference import SEARCH_WIDTH_PX, Reference
 from pipeline.result import FrameResult
-from pipeline.view import View
+from pipeline.view import View, enlargement
 
 FALLBACK_METHOD = "shadow"  # tried when the default threshold finds nothing
 TRACK_SPAN_PX = 100.0  # a tracked H is looked for at a scale where it spans about this
+FAR_SEARCH_WIDTH_PX = 1280  # the last search: frames narrower than this are enlarged to it
 TRACK_REACH = 0.5  # the tracking window: the pad's last box grown by this much of its size
 
 __all__ = ["CandidateVerifier", "process_frame"]
@@ -112,10 +114,10 @@ def process_frame(
     tries.append(("search", search, method))
     if method == DEFAULT_METHOD:
         tries.append(("search", search, FALLBACK_METHOD))
-    if image.shape[1] > SEARCH_WIDTH_PX:
-        # A far pad on a wide frame: too small at the search's width, searched at the
-        # camera's own resolution before giving up (native frames buy range).
-        tries.append(("search", View.whole(image.shape, image.shape[1]), method))
+    # A far pad: too small at the search's width, searched at the camera's own
+    # resolution before giving up (native frames buy range), and a small frame
+    # enlarged: a leg of 2-3 px keeps its shape and corners when interpolated.
+    tries.append(("search", View.enlarged(image.shape, FAR_SEARCH_WIDTH_PX), method))
     for way, view, how in tries:
         if view is None:
             continue
@@ -128,6 +130,7 @@ def process_frame(
             tally=tally,
             stages=stages,
             tracking=way == "track",
+            enlarged=max(1.0, view.scale),
         )
         mask = _mask_for(binary.mask, view, search)
         if hit is None:
@@ -189,7 +192,14 @@ def _tracking_view(
     span = float(np.ptp(px, axis=0).max())
     h_span = float(np.ptp(apply_h(prior.homography, reference.corners_m), axis=0).max())
     box = np.concatenate([px.min(axis=0), px.max(axis=0)])
-    return View.around(box, shape, TRACK_REACH * span + 8.0, TRACK_SPAN_PX / max(h_span, 1.0))
+    # A far pad is tracked as finely as the far search found it: enlarged.
+    return View.around(
+        box,
+        shape,
+        TRACK_REACH * span + 8.0,
+        TRACK_SPAN_PX / max(h_span, 1.0),
+        max_scale=enlargement(shape, FAR_SEARCH_WIDTH_PX),
+    )
 
 
 def _mask_for(mask: np.ndarray, view: View, search: View) -> np.ndarray:

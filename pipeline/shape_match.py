@@ -14,6 +14,7 @@ corners it does not need the stroke ends to survive blur.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import cv2
@@ -72,24 +73,49 @@ class ShapeMatcher:
     def match(self, contour_px: np.ndarray, min_iou: float = 0.0) -> ShapeMatch | None:
         """Compare a region's boundary (N x 2 frame pixels) with the H; None when
         the best overlap is under ``min_iou``."""
-        pts = np.asarray(contour_px, np.float64).reshape(-1, 2)
-        if len(pts) < 6:
-            return None
-        mean, cov = _polygon_moments(pts)
-        if not np.all(np.isfinite(cov)) or np.linalg.det(cov) <= 1e-9:
-            return None
-        w = _inv_sqrt(cov)
-        cand = _raster((pts - mean) @ w.T).ravel()
+        return self.match_many([contour_px], min_iou)[0]
+
+    def match_many(
+        self, contours_px: list[np.ndarray], min_iou: float = 0.0, *, top: int | None = None
+    ) -> list[ShapeMatch | None]:
+        """`match` for many regions at once: one matrix product for all of them (a
+        cluttered frame has a thousand regions). ``top``: only the best this many
+        overlaps get their match, the rest None."""
+        out: list[ShapeMatch | None] = [None] * len(contours_px)
+        todo: list[tuple[int, np.ndarray, np.ndarray]] = []
+        cells = []
+        for i, contour in enumerate(contours_px):
+            pts = np.asarray(contour, np.float64).reshape(-1, 2)
+            if len(pts) < 6:
+                continue
+            mean, cov = _polygon_moments(pts)
+            if not np.all(np.isfinite(cov)) or cov[0, 0] * cov[1, 1] - cov[0, 1] ** 2 <= 1e-9:
+                continue
+            w = _inv_sqrt(cov)
+            todo.append((i, mean, w))
+            cells.append(_raster((pts - mean) @ w.T).ravel())
+        if not todo:
+            return out
+        cand = np.stack(cells, axis=1)  # (GRID * GRID, regions)
         inter = self.rasters @ cand
-        iou = inter / np.maximum(self.areas + cand.sum() - inter, 1e-9)
-        k = int(np.argmax(iou))
-        if iou[k] < min_iou:
-            return None
-        angle = self.angles[k] + _peak_offset(iou, k) * (self.angles[1] - self.angles[0])
-        # frame = mean + W_c^-1 R(angle) W_r F (m - mean_r)
-        lin = np.linalg.inv(w) @ _rot(angle) @ self.whiten @ _FLIP
-        t = mean - lin @ (self.mean_m @ _FLIP)
-        return ShapeMatch(float(iou[k]), np.hstack([lin, t[:, None]]))
+        iou = inter / np.maximum(self.areas[:, None] + cand.sum(axis=0)[None, :] - inter, 1e-9)
+        best = np.argmax(iou, axis=0)
+        best_iou = iou[best, np.arange(len(todo))]
+        order = np.argsort(-best_iou, kind="stable")
+        if top is not None:
+            order = order[:top]
+        step = self.angles[1] - self.angles[0]
+        for j in order:
+            k = int(best[j])
+            if best_iou[j] < min_iou:
+                break
+            i, mean, w = todo[j]
+            angle = self.angles[k] + _peak_offset(iou[:, j], k) * step
+            # frame = mean + W_c^-1 R(angle) W_r F (m - mean_r)
+            lin = _inv2(w) @ _rot(angle) @ self.whiten @ _FLIP
+            t = mean - lin @ (self.mean_m @ _FLIP)
+            out[i] = ShapeMatch(float(best_iou[j]), np.hstack([lin, t[:, None]]))
+        return out
 
 
 def _polygon_moments(poly: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -106,10 +132,17 @@ def _polygon_moments(poly: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _inv_sqrt(cov: np.ndarray) -> np.ndarray:
     """The inverse square root of a 2 x 2 covariance, in closed form:
     for s = sqrt(det) and t = sqrt(trace + 2 s), sqrt(C) = (C + s I) / t."""
-    s = np.sqrt(max(np.linalg.det(cov), 1e-24))
-    t = np.sqrt(cov[0, 0] + cov[1, 1] + 2.0 * s)
-    root = (cov + s * np.eye(2)) / t
-    return np.linalg.inv(root)
+    a, b, d = float(cov[0, 0]), float(cov[0, 1]), float(cov[1, 1])
+    s = math.sqrt(max(a * d - b * b, 1e-24))
+    t = math.sqrt(a + d + 2.0 * s)
+    return _inv2(np.array([[a + s, b], [b, d + s]]) / t)
+
+
+def _inv2(m: np.ndarray) -> np.ndarray:
+    """The inverse of a 2 x 2 matrix (numpy's general inverse costs more per call)."""
+    a, b, c, d = float(m[0, 0]), float(m[0, 1]), float(m[1, 0]), float(m[1, 1])
+    det = a * d - b * c
+    return np.array([[d / det, -b / det], [-c / det, a / det]])
 
 
 def _rot(a: float) -> np.ndarray:

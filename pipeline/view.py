@@ -18,9 +18,15 @@ import numpy as np
 from pipeline.camera import Camera
 
 
+def enlargement(frame_shape: tuple[int, ...], width: int) -> float:
+    """How much a frame is enlarged to look at it ``width`` pixels wide (1: not at all)."""
+    return max(1.0, width / frame_shape[1])
+
+
 @dataclass(frozen=True)
 class View:
-    """Frame pixels [x0, x1) x [y0, y1), resized by ``scale`` (<= 1)."""
+    """Frame pixels [x0, x1) x [y0, y1), resized by ``scale`` (above 1: enlarged, for
+    a pad too small to be found at the frame's own resolution)."""
 
     x0: int
     y0: int
@@ -30,10 +36,16 @@ class View:
 
     @classmethod
     def around(
-        cls, box: np.ndarray, frame_shape: tuple[int, ...], grow: float, scale: float
+        cls,
+        box: np.ndarray,
+        frame_shape: tuple[int, ...],
+        grow: float,
+        scale: float,
+        max_scale: float = 1.0,
     ) -> View | None:
         """The view of a box (x0, y0, x1, y1 in frame pixels) grown by ``grow`` pixels on
-        each side and clipped to the frame, or None when nothing of it is in the frame."""
+        each side and clipped to the frame, or None when nothing of it is in the frame;
+        ``scale`` at most ``max_scale`` (above 1: the window enlarged)."""
         h, w = frame_shape[:2]
         x0 = max(0, math.floor(box[0] - grow))
         y0 = max(0, math.floor(box[1] - grow))
@@ -41,12 +53,17 @@ class View:
         y1 = min(h, math.ceil(box[3] + grow) + 1)
         if x1 - x0 < 16 or y1 - y0 < 16:
             return None
-        return cls(x0, y0, x1, y1, float(min(1.0, max(scale, 16.0 / min(x1 - x0, y1 - y0)))))
+        return cls(x0, y0, x1, y1, float(min(max_scale, max(scale, 16.0 / min(x1 - x0, y1 - y0)))))
 
     @classmethod
     def whole(cls, frame_shape: tuple[int, ...], max_width: int) -> View:
         h, w = frame_shape[:2]
         return cls(0, 0, w, h, min(1.0, max_width / w))
+
+    @classmethod
+    def enlarged(cls, frame_shape: tuple[int, ...], width: int) -> View:
+        """The whole frame interpolated up to ``width`` (at least its own)."""
+        return cls(0, 0, frame_shape[1], frame_shape[0], enlargement(frame_shape, width))
 
     @property
     def size(self) -> tuple[int, int]:
@@ -73,7 +90,8 @@ class View:
         crop = frame[self.y0 : self.y1, self.x0 : self.x1]
         if self.size == (crop.shape[1], crop.shape[0]):
             return crop
-        return cv2.resize(crop, self.size, interpolation=cv2.INTER_AREA)
+        how = cv2.INTER_AREA if self.scale < 1.0 else cv2.INTER_CUBIC
+        return cv2.resize(crop, self.size, interpolation=how)
 
     def camera(self, camera: Camera) -> Camera:
         """The frame's camera (``camera`` at the frame's size) for this view."""

@@ -7,7 +7,8 @@
   Visland, ArUco and AprilTag 3 on the same poses, and range90 (`pipeline.bench.sweep`);
 - ``--report DIR``: the dissertation's experiments reproduced (`pipeline.bench.report`).
 
-One core (``cv2.setNumThreads(1)``, one torch thread); times are wall-clock per frame.
+One core (OpenCV and the BLAS on one thread, `pipeline.cores`; one torch thread); times
+are wall-clock per frame.
 """
 
 from pipeline.bench.accuracy import run, run_designs

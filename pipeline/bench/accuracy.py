@@ -15,7 +15,6 @@ from __future__ import annotations
 import sys
 import time
 
-import cv2
 import numpy as np
 
 from pipeline import Camera, Reference, process_frame
@@ -23,6 +22,7 @@ from pipeline.bench.frames import SCENE_EVERY, altitude_for, make_scenes, make_v
 from pipeline.bench.hint import NOISE_DEG, gravity_hint
 from pipeline.bench.markers import ArucoDetector
 from pipeline.bench.tally import Tally, ratio, stats
+from pipeline.cores import use_one_core
 from pipeline.preprocess import DEFAULT_METHOD
 from pipeline.render import DESIGNS, get_design
 from pipeline.render.view import render_view
@@ -38,7 +38,7 @@ def run(
     hint: bool = False,
 ) -> dict:
     """One design's figures (the bench's keys since the start, plus the design's)."""
-    cv2.setNumThreads(1)
+    use_one_core()
     d = get_design(design)
     camera = Camera.from_fov(640, 480, 60.0)
     pic = d.draw()

@@ -32,6 +32,7 @@ from pipeline import Camera, Reference, process_frame
 from pipeline.bench.plot import PALETTE, line_panel, save, scatter_panel
 from pipeline.bench.sweep import run_sweep
 from pipeline.bench.tally import pose_errors, stats
+from pipeline.cores import use_one_core
 from pipeline.moments import shape_moments
 from pipeline.pose import TURN
 from pipeline.preprocess import DEFAULT_METHOD
@@ -61,7 +62,7 @@ def write_report(
     shortens the sweep and the RBM's training to a smoke run). ``sweep``/``rbm``
     False leave those experiments out (the report says so).
     """
-    cv2.setNumThreads(1)
+    use_one_core()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     trials = frames or (3 if quick else 30)

@@ -22,7 +22,6 @@ import sys
 import time
 from pathlib import Path
 
-import cv2
 import numpy as np
 
 from pipeline import Camera, Reference, process_frame
@@ -31,6 +30,7 @@ from pipeline.bench.hint import NOISE_DEG, gravity_hint
 from pipeline.bench.markers import AprilTagDetector, ArucoDetector, settings
 from pipeline.bench.plot import line_panel, save
 from pipeline.bench.tally import Tally
+from pipeline.cores import use_one_core
 from pipeline.preprocess import DEFAULT_METHOD
 from pipeline.render import PAD_SIZE_M, Design, get_design
 from pipeline.render.view import render_view
@@ -86,7 +86,7 @@ def run_sweep(
         raise ValueError(f"sweep must be one of {tuple(_X_KEY)}, got {kind!r}")
     if frames <= 0:
         raise ValueError(f"frames must be positive, got {frames}")
-    cv2.setNumThreads(1)
+    use_one_core()
     d = get_design(design)
     try:
         reference: Reference | None = Reference.from_image(d.draw().image, d.size_m)

@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import time
 
-import cv2
 import numpy as np
 
 from pipeline import Camera, Reference, process_frame
 from pipeline.bench.frames import altitude_for
 from pipeline.bench.hint import gravity_hint
 from pipeline.bench.tally import Tally
+from pipeline.cores import use_one_core
 from pipeline.render import camera_rotation, get_design, render
 
 RESOLUTIONS = ((640, 480), (1920, 1080))
@@ -27,7 +27,7 @@ def run_track(*, frames: int = 60, seed: int = 0, design: str = "default") -> di
     each frame was found, and the tracked poses' errors (with the attitude hint)."""
     if frames < 2:
         raise ValueError(f"frames must be at least 2, got {frames}")
-    cv2.setNumThreads(1)
+    use_one_core()
     d = get_design(design)
     reference = Reference.from_image(d.draw().image, d.size_m)
     scene = d.scene(np.random.default_rng(seed), floor="textured", lookalikes=2)

@@ -1,0 +1,69 @@
+"""A far pad on a small frame: found on the frame enlarged, then tracked enlarged.
+
+With the vehicle's attitude and heading as hints, as the station gives them: so far
+away the two planar poses fit the pixels alike.
+
+At 18 m a 0.55 m pad spans 17 px of a 640 x 480 frame at 60 degrees, its H's legs
+2-3 px: thresholded at the frame's own pixels the legs merge or break. Interpolated
+to twice the size, the H keeps its shape and corners (`pipeline.frame`'s last search).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pipeline import Camera, Reference, process_frame
+from pipeline.bench.hint import gravity_hint
+from pipeline.render import camera_rotation, make_pad_image, make_scene, render
+from pipeline.view import View
+
+CAM = Camera.from_fov(640, 480, 60.0)
+
+
+@pytest.fixture(scope="module")
+def reference():
+    return Reference.from_image(make_pad_image(800), 0.55)
+
+
+def _frames(altitude: float, count: int):
+    for k in range(count):
+        rng = np.random.default_rng(100 + k)
+        scene = make_scene(make_pad_image(800), 0.55, rng=rng)
+        position = np.array([rng.uniform(-2, 2), rng.uniform(-1.5, 1.5), altitude])
+        yaw = rng.uniform(0, 360)
+        R = camera_rotation(yaw, tilt_deg=rng.uniform(0, 8), tilt_dir_deg=rng.uniform(0, 360))
+        hints = {"yaw_hint": yaw, "gravity_hint": gravity_hint(R, [k])}
+        yield render(scene, CAM, position, R, snr_db=30, rng=rng), position, hints
+
+
+def test_a_pad_18_m_away_is_found_and_its_position_measured(reference):
+    found = []
+    for frame, position, hints in _frames(18.0, 12):
+        res = process_frame(frame, reference, CAM, **hints)
+        if res.detected:
+            found.append(np.linalg.norm(res.pose.position_m - position) / 16.0)
+    # Searched at the frame's own resolution alone: 3 of these 12 (1 of 12 at 20 m).
+    assert len(found) >= 10, len(found)
+    assert np.median(found) < 0.04, found
+
+
+def test_a_far_pad_once_found_is_tracked_in_an_enlarged_window(reference):
+    frame, _, hints = next(_frames(15.0, 1))
+    first = process_frame(frame, reference, CAM, **hints)
+    assert first.detected and first.found_by == "search"
+    again = process_frame(frame, reference, CAM, prior=first, **hints)
+    assert again.found_by == "track"
+    np.testing.assert_allclose(again.corners_px, first.corners_px, atol=0.5)
+
+
+def test_an_enlarged_view_keeps_the_frames_pixel_centres():
+    frame = np.zeros((48, 64, 3), np.uint8)
+    frame[20, 30] = 255
+    view = View.enlarged(frame.shape, 128)
+    assert view.scale == 2.0 and view.size == (128, 96)
+    big = view.image(frame)[..., 0].astype(float)
+    y, x = np.unravel_index(np.argmax(big), big.shape)
+    # Frame pixel (30, 20) lies at view pixel (2 * 30 + 0.5, 2 * 20 + 0.5): between 4 pixels.
+    assert (x, y) in {(60, 40), (61, 40), (60, 41), (61, 41)}
+    np.testing.assert_allclose(view.matrix @ [30, 20, 1], [60.5, 40.5, 1])
