@@ -31,7 +31,7 @@ from pipeline.view import View, enlargement
 
 FALLBACK_METHOD = "shadow"  # tried when the default threshold finds nothing
 TRACK_SPAN_PX = 100.0  # a tracked H is looked for at a scale where it spans about this
-FAR_SEARCH_WIDTH_PX = 1280  # the last search: frames narrower than this are enlarged to it
+FAR_SEARCH_WIDTH_PX = 1280  # the last search: narrower frames enlarged toward it (view.py)
 TRACK_REACH = 0.5  # the tracking window: the pad's last box grown by this much of its size
 
 __all__ = ["CandidateVerifier", "process_frame"]

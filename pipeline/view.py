@@ -17,10 +17,13 @@ import numpy as np
 
 from pipeline.camera import Camera
 
+MAX_ENLARGEMENT = 2.0  # interpolating further adds cost, not shape: a leg needs 4-6 px
+
 
 def enlargement(frame_shape: tuple[int, ...], width: int) -> float:
-    """How much a frame is enlarged to look at it ``width`` pixels wide (1: not at all)."""
-    return max(1.0, width / frame_shape[1])
+    """How much a frame is enlarged to look at it ``width`` pixels wide: 1 (not at all)
+    to ``MAX_ENLARGEMENT``."""
+    return min(MAX_ENLARGEMENT, max(1.0, width / frame_shape[1]))
 
 
 @dataclass(frozen=True)
@@ -62,7 +65,7 @@ class View:
 
     @classmethod
     def enlarged(cls, frame_shape: tuple[int, ...], width: int) -> View:
-        """The whole frame interpolated up to ``width`` (at least its own)."""
+        """The whole frame interpolated toward ``width`` (see `enlargement`)."""
         return cls(0, 0, frame_shape[1], frame_shape[0], enlargement(frame_shape, width))
 
     @property

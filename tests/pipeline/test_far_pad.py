@@ -67,3 +67,10 @@ def test_an_enlarged_view_keeps_the_frames_pixel_centres():
     # Frame pixel (30, 20) lies at view pixel (2 * 30 + 0.5, 2 * 20 + 0.5): between 4 pixels.
     assert (x, y) in {(60, 40), (61, 40), (60, 41), (61, 41)}
     np.testing.assert_allclose(view.matrix @ [30, 20, 1], [60.5, 40.5, 1])
+
+
+def test_a_small_camera_is_enlarged_at_most_twice():
+    # A CMUcam4's 160 x 120 frame: 320 x 240 for the last search, not 1280 x 960.
+    assert View.enlarged((120, 160, 3), 1280).size == (320, 240)
+    assert View.enlarged((720, 1280, 3), 1280).scale == 1.0
+    assert View.enlarged((1080, 1920, 3), 1280).scale == 1.0

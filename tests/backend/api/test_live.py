@@ -110,7 +110,10 @@ def test_upload_list_activate(http):
     assert http.get("/api/reference").json()["id"] == old
 
 
-def test_ws_hello_telemetry_frames_and_jpeg(live):
+def test_ws_hello_telemetry_frames_and_jpeg(live, http):
+    # The hello reports the link as it is: up, once the stand-in has answered (the module's
+    # first test waits for that too, but this one may run alone).
+    wait_for(lambda: http.get("/api/status").json()["link"]["state"] == "up", timeout=15)
     with connect(live.ws_url, open_timeout=5) as ws:
         hello = json.loads(ws.recv(timeout=5))
         assert hello["type"] == "hello" and hello["telemetry"]["state"] == "up"
