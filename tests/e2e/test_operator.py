@@ -340,10 +340,22 @@ def test_battery_low_and_failsafe_alerts_sound_until_acknowledged(page, station)
         "data-level", "warn"
     )
     screenshot(page, "alerts-battery")
+    # The rows stay put while telemetry streams in (a row rebuilt on every message
+    # took its button from under the click, and a loaded machine's click missed).
+    page.evaluate(
+        """() => {
+          window.alertRowsRemoved = 0;
+          new MutationObserver((changes) => {
+            for (const c of changes) window.alertRowsRemoved += c.removedNodes.length;
+          }).observe(document.querySelector('[data-testid="alerts"]'), { childList: true });
+          window.beepsThen = window.visland.alarm.beeps;
+        }"""
+    )
+    page.wait_for_function("window.visland.alarm.beeps >= window.beepsThen + 2")
+    assert page.evaluate("window.alertRowsRemoved") == 0
     for alert in (low, failsafe):
         alert.get_by_test_id("alert-ack").click()
-        # each one gone before the next is clicked (the list re-renders; a loaded
-        # machine may take its time)
+        # each one gone before the next is clicked (a loaded machine may take its time)
         expect(alert).to_have_count(0, timeout=30_000)
     expect(page.get_by_test_id("alert").filter(has_text="Battery")).to_have_count(0)
     page.wait_for_function("!window.visland.alarm.sounding")

@@ -24,6 +24,7 @@ export function mountAlertBanner(root: HTMLElement, ctx: Ctx): AlarmState {
   root.append(banner);
   const acked = new Set<string>(loadAcked());
   const shown = new Map<string, Shown>();
+  const rows = new Map<string, HTMLElement>();
   const alarm: AlarmState = { sounding: false, beeps: 0, alerts: [] };
   let ekfWasHealthy = false;
   let wasOpen = false; // the first connection is not a lost one
@@ -78,24 +79,40 @@ export function mountAlertBanner(root: HTMLElement, ctx: Ctx): AlarmState {
     alarm.alerts = list.map((a) => ({ id: a.id, title: a.title, active: a.active }));
     alarm.sounding = list.some((a) => a.active);
     banner.dataset.level = list.some((a) => a.active && a.level === "critical") ? "critical" : "warning";
-    banner.replaceChildren(
-      ...list.map((a) => {
-        const ack = h("button", { class: "btn btn-small alert-ack", type: "button", "data-testid": "alert-ack" }, "Acknowledge");
-        ack.addEventListener("click", () => {
-          acked.add(a.id);
-          shown.delete(a.id);
-          saveAcked(acked);
-          render();
-        });
-        return h(
-          "div",
-          { class: `alert alert-${a.level}`, "data-testid": "alert", "data-alert-id": a.id, "data-active": String(a.active) },
-          h("strong", { class: "alert-title" }, a.title),
-          h("span", { class: "alert-detail" }, a.active ? a.detail : `${a.detail} (cleared)`),
-          ack,
-        );
-      }),
+    // Rows are kept and updated in place: a row rebuilt on every telemetry message
+    // would take its Acknowledge button away from under the operator's click.
+    for (const [id, row] of rows) if (!shown.has(id)) {
+      row.remove();
+      rows.delete(id);
+    }
+    list.forEach((a, i) => {
+      const row = rows.get(a.id) ?? newRow(a.id);
+      const cls = `alert alert-${a.level}`;
+      if (row.className !== cls) row.className = cls;
+      if (row.dataset.active !== String(a.active)) row.dataset.active = String(a.active);
+      setText(row.querySelector(".alert-title"), a.title);
+      setText(row.querySelector(".alert-detail"), a.active ? a.detail : `${a.detail} (cleared)`);
+      if (banner.children[i] !== row) banner.insertBefore(row, banner.children[i] ?? null);
+    });
+  }
+
+  function newRow(id: string): HTMLElement {
+    const ack = h("button", { class: "btn btn-small alert-ack", type: "button", "data-testid": "alert-ack" }, "Acknowledge");
+    ack.addEventListener("click", () => {
+      acked.add(id);
+      shown.delete(id);
+      saveAcked(acked);
+      render();
+    });
+    const row = h(
+      "div",
+      { "data-testid": "alert", "data-alert-id": id },
+      h("strong", { class: "alert-title" }),
+      h("span", { class: "alert-detail" }),
+      ack,
     );
+    rows.set(id, row);
+    return row;
   }
 
   store.subscribe(["connection", "telemetry", "status", "thresholds"], render);
@@ -106,6 +123,10 @@ export function mountAlertBanner(root: HTMLElement, ctx: Ctx): AlarmState {
   }, 2000);
   render();
   return alarm;
+}
+
+function setText(el: Element | null, text: string): void {
+  if (el && el.textContent !== text) el.textContent = text;
 }
 
 function loadAcked(): string[] {
