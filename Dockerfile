@@ -24,6 +24,10 @@ RUN pip install --no-cache-dir .
 COPY --from=frontend /src/frontend/dist frontend/dist
 RUN useradd --create-home --uid 1000 visland && mkdir /data && chown visland /data
 USER visland
+# The vision's compiled loops (numba) are cached where this user may write: the
+# installed package is root's.
+ENV NUMBA_CACHE_DIR=/home/visland/.cache/numba
+RUN python -m pipeline.warmup
 VOLUME ["/data"]
 # Inside the container the server must listen on all interfaces to be reachable;
 # docker-compose.yml publishes the ports on the host's loopback only.

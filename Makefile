@@ -23,7 +23,9 @@ $(NODE_STAMP): frontend/package.json frontend/package-lock.json
 $(DIST): $(NODE_STAMP) $(FRONTEND_SRC)
 	cd frontend && npm run build --silent
 
+# The vision's compiled loops: compiled once here (seconds), then loaded from numba's cache.
 install: $(STAMP) $(DIST)
+	$(BIN)/python -m pipeline.warmup
 
 frontend: $(DIST)
 

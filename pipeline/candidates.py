@@ -13,6 +13,7 @@ H's edges where it puts them.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -29,6 +30,7 @@ MIN_H_AREA_PX = 24.0  # smaller regions carry too few pixels for an H
 MIN_H_SPAN_PX = 8.0  # an H narrower than this is not looked for (see find.SMALL_H_PX)
 MIN_SHAPE_IOU = 0.4  # whitened overlap with the reference's H (look-alikes rank below)
 MAX_SHAPE_RESIDUAL = 0.1  # CSS corners: homography RMS / sqrt(area) (real H < 0.05)
+HOPELESS_AFFINE = 3.0  # an affine fit this many times worse: no homography is tried
 MIN_H_SUPPORT = 0.6  # share of the H's sides found on the channel's edges
 CONFIDENT_SUPPORT = 0.9  # a fit this good is not tried from another start
 # Edge support plus shape overlap: two views of how much of an H this is. Real
@@ -91,16 +93,13 @@ def candidates(
 
 def locate_all(found: list[Region], binary: Binarized, reference: Reference) -> Iterator[Located]:
     """Located H's among the regions, best shape first (at most ``MAX_LOCATED`` tried)."""
-    smooth = binary.smooth.astype(np.float32)
     for cand in candidates(found, reference, MAX_LOCATED):
-        located = locate(cand, binary, reference, smooth)
+        located = locate(cand, binary, reference)
         if located is not None:
             yield located
 
 
-def locate(
-    cand: Candidate, binary: Binarized, reference: Reference, smooth: np.ndarray
-) -> Located | None:
+def locate(cand: Candidate, binary: Binarized, reference: Reference) -> Located | None:
     """Fit the H's sides from the candidate's shape match, then if that does not
     find them well, from its CSS corners (the seed's reading); the fit that
     finds more of the H's edges wins.
@@ -118,12 +117,11 @@ def locate(
             # An affine start may be a few pixels off on a tilted view.
             search = float(np.clip(0.12 * span, 2.5, 3.0))
         else:
-            css = css_corners(cand.region, binary, reference)
-            H0 = None if css is None else cv2.findHomography(reference.corners_m, css, 0)[0]
+            H0 = css_homography(cand.region, binary, reference)
             if H0 is None:
                 continue
             search = 2.5
-        fit = fit_homography(smooth, reference.h_edges, H0, search_px=search)
+        fit = fit_homography(binary.levels, reference.h_edges, H0, search_px=search)
         if fit is None or fit.support < MIN_H_SUPPORT:
             continue
         corners = apply_h(fit.H, reference.corners_m)
@@ -174,35 +172,43 @@ def blob_separation(
         ys, xs = np.nonzero(band_mask)
         keep = board_only(np.column_stack([xs + x0, ys + y0]).astype(np.float64))
         band_mask[ys[~keep], xs[~keep]] = False
-    inside = core > 0
-    whole = _separation(patch[inside], patch[band_mask])
+    # Levels summed per quadrant around the region's centre, inside (1) and in the
+    # band (2): one pass for the whole and its quadrants.
     cx, cy = region.contour.mean(axis=0) - np.array([x0, y0])
-    left = np.arange(patch.shape[1])[None, :] < cx
-    top = np.arange(patch.shape[0])[:, None] < cy
-    parts = []
-    for q in (left & top, ~left & top, left & ~top, ~left & ~top):
-        v = _separation(patch[inside & q], patch[band_mask & q])
-        if math.isfinite(v):
-            parts.append(v)
+    right = np.arange(patch.shape[1])[None, :] >= cx
+    bottom = np.arange(patch.shape[0])[:, None] >= cy
+    cls = (core > 0).astype(np.intp) + 2 * band_mask
+    key = (4 * cls + right + 2 * bottom)[cls > 0]
+    values = patch[cls > 0]
+    n = np.bincount(key, minlength=12)[4:].reshape(2, 4).astype(np.float64)
+    s1 = np.bincount(key, values, minlength=12)[4:].reshape(2, 4)
+    s2 = np.bincount(key, values * values, minlength=12)[4:].reshape(2, 4)
+    whole = _separation(n.sum(axis=1), s1.sum(axis=1), s2.sum(axis=1))
+    parts = [v for q in range(4) if math.isfinite(v := _separation(n[:, q], s1[:, q], s2[:, q]))]
     if len(parts) < 3:
         return whole
     local = float(np.median(parts))
     return whole if whole >= local else local  # (a nan whole: the quadrants')
 
 
-def _separation(inside: np.ndarray, band: np.ndarray) -> float:
-    if len(inside) < 4 or len(band) < 4:
+def _separation(n: np.ndarray, s1: np.ndarray, s2: np.ndarray) -> float:
+    """(mean inside - mean of the band) / pooled standard deviation, from the two
+    sets' counts, sums and sums of squares (inside first); nan for too few pixels."""
+    if n[0] < 4 or n[1] < 4:
         return math.nan
-    pooled = math.sqrt(0.5 * (float(inside.var()) + float(band.var())))
-    return (float(inside.mean()) - float(band.mean())) / max(pooled, 1.0)
+    mean = s1 / n
+    var = np.maximum(s2 / n - mean * mean, 0.0)
+    pooled = math.sqrt(0.5 * float(var[0] + var[1]))
+    return float(mean[0] - mean[1]) / max(pooled, 1.0)
 
 
-def css_corners(region: Region, binary: Binarized, reference: Reference) -> np.ndarray | None:
-    """The seed's reading: 12 CSS corners in the reference's order, when they fit it."""
+def css_homography(region: Region, binary: Binarized, reference: Reference) -> np.ndarray | None:
+    """The seed's reading: the homography (pad metres -> pixels) that puts the
+    reference's corners on the region's 12 CSS corners, when they fit it."""
     for reading in corner_readings(region, binary):
-        ordered, residual = match_corners(reading, reference.corners_m, region.area)
+        _, residual, H = match_corners(reading, reference.corners_m, region.area)
         if residual <= MAX_SHAPE_RESIDUAL:
-            return ordered
+            return H
     return None
 
 
@@ -231,24 +237,70 @@ def corner_readings(region: Region, binary: Binarized) -> Iterator[np.ndarray]:
         yield poly
 
 
-def match_corners(poly: np.ndarray, ref_m: np.ndarray, area: float) -> tuple[np.ndarray, float]:
-    """Rotate the corner list onto the reference's order; return it and the fit residual.
+def match_corners(
+    poly: np.ndarray, ref_m: np.ndarray, area: float
+) -> tuple[np.ndarray, float, np.ndarray | None]:
+    """Rotate the corner list onto the reference's order; return it, the fit residual
+    and the homography from the reference's corners (None when there is none, or
+    when even an affine map leaves them hopelessly far: the residual is then its).
 
     All 12 cyclic shifts are scored at once by an affine fit (a few microseconds);
     the best is checked with a full homography, whose residual relative to the
     shape's size says whether this is the reference's H at all.
     """
     n = len(ref_m)
-    X = np.column_stack([ref_m, np.ones(n)])
-    P = np.linalg.pinv(X)  # (3, n)
-    shifts = np.stack([np.roll(poly, -s, axis=0) for s in range(n)])  # (n, n, 2)
-    fitted = np.einsum("ij,sjk->sik", X @ P, shifts)
+    shifts = poly[_shift_index(n)]  # (n, n, 2): shift s starts at corner s
+    fitted = np.einsum("ij,sjk->sik", _affine_projector(ref_m.tobytes(), n), shifts)
     err = np.sum((shifts - fitted) ** 2, axis=(1, 2))
-    s = int(np.argmin(err))
-    ordered = shifts[s]
-    H, _ = cv2.findHomography(ref_m, ordered, 0)
+    best = int(np.argmin(err))
+    ordered = shifts[best]
+    # A view's perspective bends an H's corners off their affine places by a few
+    # percent of its size: far more, and no homography fits them either.
+    affine_rms = math.sqrt(float(err[best]) / n / area)
+    if affine_rms > HOPELESS_AFFINE * MAX_SHAPE_RESIDUAL:
+        return ordered, affine_rms, None
+    H = _dlt(ref_m, ordered)
     if H is None:
-        return ordered, math.inf
-    proj = cv2.perspectiveTransform(ref_m.reshape(-1, 1, 2), H).reshape(-1, 2)
+        return ordered, math.inf, None
+    proj = apply_h(H, ref_m)
     rms = float(np.sqrt(np.mean(np.sum((proj - ordered) ** 2, axis=1))))
-    return ordered, rms / math.sqrt(area)
+    return ordered, rms / math.sqrt(area), H
+
+
+@functools.cache
+def _shift_index(n: int) -> np.ndarray:
+    return (np.arange(n)[None, :] + np.arange(n)[:, None]) % n
+
+
+@functools.lru_cache(maxsize=16)
+def _affine_projector(ref_bytes: bytes, n: int) -> np.ndarray:
+    """The n x n matrix that takes n points to their least-squares affine image of
+    the reference's points (given as the bytes of an n x 2 float64 array)."""
+    ref = np.frombuffer(ref_bytes, np.float64).reshape(n, 2)
+    X = np.column_stack([ref, np.ones(n)])
+    return X @ np.linalg.pinv(X)
+
+
+def _dlt(src: np.ndarray, dst: np.ndarray) -> np.ndarray | None:
+    """The least-squares homography src -> dst (normalised direct linear transform)."""
+    Ts, Td = _normaliser(src), _normaliser(dst)
+    s, d = apply_h(Ts, src), apply_h(Td, dst)
+    n = len(s)
+    A = np.zeros((2 * n, 9))
+    A[0::2, 0:2], A[0::2, 2] = s, 1.0
+    A[1::2, 3:5], A[1::2, 5] = s, 1.0
+    A[0::2, 6:8] = -d[:, :1] * s
+    A[0::2, 8] = -d[:, 0]
+    A[1::2, 6:8] = -d[:, 1:] * s
+    A[1::2, 8] = -d[:, 1]
+    Hn = np.linalg.svd(A)[2][-1].reshape(3, 3)
+    H = np.linalg.inv(Td) @ Hn @ Ts
+    if not np.all(np.isfinite(H)) or abs(H[2, 2]) < 1e-12:
+        return None
+    return H / H[2, 2]
+
+
+def _normaliser(pts: np.ndarray) -> np.ndarray:
+    c = pts.mean(axis=0)
+    scale = math.sqrt(2.0) / max(float(np.mean(np.hypot(*(pts - c).T))), 1e-12)
+    return np.array([[scale, 0.0, -scale * c[0]], [0.0, scale, -scale * c[1]], [0.0, 0.0, 1.0]])

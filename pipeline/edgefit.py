@@ -20,6 +20,7 @@ from functools import cached_property
 import cv2
 import numpy as np
 
+from pipeline import edge_kernels as kernels
 from pipeline.camera import Camera
 
 MIN_SIDE_PX = 7.0  # sides shorter than this in the image are not sampled
@@ -27,7 +28,6 @@ END_MARGIN = 0.12  # at most this share of a straight side is left out at each e
 END_MARGIN_OF_EXTENT = 0.02  # and at most this share of the model's size
 MODEL_SAMPLES = 600  # points along all the model's sides, spread by length
 MAX_SAMPLES_PER_SIDE = 40
-MIN_GRADIENT = 4.0
 CURVE_VERTICES = 12  # polygons with more vertices trace a curve (a ring, a disc's rim)
 
 
@@ -112,42 +112,25 @@ def fit_edges(
     camera : intrinsics of ``image``.
     rvec, tvec : starting pose (OpenCV pad -> camera).
     """
-    img = image if image.dtype == np.float32 else image.astype(np.float32)
+    img = np.ascontiguousarray(image, np.float32)
     rvec = np.asarray(rvec, np.float64).reshape(3, 1).copy()
     tvec = np.asarray(tvec, np.float64).reshape(3, 1).copy()
     result = None  # (rvec, tvec, rms, inliers, sides) of the last good step
     for it in range(iterations):
         search = search_px if it == 0 else max(1.5, 0.6 * search_px)
-        samples = _samples(model, camera, rvec, tvec, search + 2.0)
-        if samples is None:
-            break
-        points, normal, side_id = samples
-        proj, jac = _project(points, rvec, tvec, camera)
-        delta, ok = edge_offsets(img, proj, normal, search)
-        if np.count_nonzero(ok) < 12:
-            break
-        # Residual: how far the model edge lies from the found edge, along the normal.
-        r = -delta[ok]
-        J = np.einsum("nk,nkp->np", normal[ok], jac[ok])
-        keep = np.abs(r - np.median(r)) <= max(0.5, 3.0 * _mad(r))
-        r, J = r[keep], J[keep]
-        if len(r) < 12:
-            break
-        # Huber weights keep a few wrong edge hits from pulling the pose.
-        w = np.where(np.abs(r) <= 0.5, 1.0, 0.5 / np.maximum(np.abs(r), 1e-9))
-        JtW = J.T * w
-        H = JtW @ J + 1e-9 * np.eye(6)
-        try:
-            step = np.linalg.solve(H, -JtW @ r)
-        except np.linalg.LinAlgError:
+        pa, pb, usable = _sides_in_view(model, camera, rvec, tvec, search + 2.0)
+        proj, jac = _project(model.samples[0], rvec, tvec, camera)
+        step, rms, inliers, sides, ok = kernels.pose_step(
+            img, pa, pb, model.bright, model.polygon, model.curved, usable,
+            model.samples[1], proj, jac, float(search), MIN_SIDE_PX, kernels.MIN_DROP,
+        )  # fmt: skip
+        if not ok:
             break
         rvec = rvec + step[:3, None]
         tvec = tvec + step[3:, None]
         if tvec[2, 0] <= 0:
             return None
-        rms = float(np.sqrt(np.mean((r + J @ step) ** 2)))
-        sides = len(np.unique(side_id[ok][keep]))
-        result = (rvec.copy(), tvec.copy(), rms, len(r), sides)
+        result = (rvec.copy(), tvec.copy(), rms, inliers, sides)
         if np.linalg.norm(step[:3]) < 2e-5 and np.linalg.norm(step[3:]) < 2e-5 * float(tvec[2, 0]):
             break
     return None if result is None else EdgeFit(*result)
@@ -159,22 +142,12 @@ def edge_support(image: np.ndarray, model: EdgeModel, camera: Camera, rvec, tvec
     A look-alike shape can fit the H's corners, but the dark board around it,
     the side bars and the board's outline will not be where the pose says.
     """
-    img = image if image.dtype == np.float32 else image.astype(np.float32)
-    samples = _samples(model, camera, rvec, tvec, 0.0)
-    if samples is None:
-        return 0.0
-    points, normal, _ = samples
-    proj, _ = _project(points, rvec, tvec, camera)
-    delta, ok = edge_offsets(img, proj, normal, 1.5)
-    h, w = img.shape[:2]
-    seen = (proj[:, 0] > 2) & (proj[:, 1] > 2) & (proj[:, 0] < w - 3) & (proj[:, 1] < h - 3)
-    if not seen.any():
-        return 0.0
-    return float(np.mean((ok & (np.abs(delta) <= 0.75))[seen]))
-
-
-def _mad(x: np.ndarray) -> float:
-    return float(1.4826 * np.median(np.abs(x - np.median(x))))
+    pa, pb, usable = _sides_in_view(model, camera, rvec, tvec, 0.0)
+    proj, _ = _project(model.samples[0], rvec, tvec, camera)
+    return kernels.pose_support(
+        np.ascontiguousarray(image, np.float32), pa, pb, model.bright, model.polygon,
+        model.curved, usable, model.samples[1], proj, MIN_SIDE_PX, kernels.MIN_DROP,
+    )  # fmt: skip
 
 
 def _project(model: np.ndarray, rvec, tvec, camera: Camera):
@@ -215,78 +188,12 @@ def _clearance_m(a: np.ndarray, b: np.ndarray, polygon: np.ndarray) -> np.ndarra
     return out
 
 
-def _samples(model: EdgeModel, camera: Camera, rvec, tvec, min_clearance_px: float):
-    """Model points along every side measurable in the image, with image normals."""
+def _sides_in_view(model: EdgeModel, camera: Camera, rvec, tvec, min_clearance_px: float):
+    """The model's sides' ends in the image, and which sides lie at least
+    ``min_clearance_px`` from a side alongside them."""
     ends, _ = _project(np.vstack([model.a_m, model.b_m]), rvec, tvec, camera)
     R, _ = cv2.Rodrigues(rvec)
-    depth = 0.5 * (model.a_m + model.b_m) @ R[2, :2] + float(tvec[2, 0])
+    depth = 0.5 * (model.a_m + model.b_m) @ R[2, :2] + float(np.asarray(tvec).ravel()[2])
     clearance_px = model.clearance_m * camera.fx / np.maximum(depth, 1e-6)
     n = len(model.a_m)
-    return side_samples(model, ends[:n], ends[n:], clearance_px >= min_clearance_px)
-
-
-def side_samples(
-    model: EdgeModel,
-    pa: np.ndarray,
-    pb: np.ndarray,
-    usable: np.ndarray,
-    min_side_px: float = MIN_SIDE_PX,
-):
-    """The model's sample points on the sides that are long enough in the image.
-
-    ``pa``/``pb``: the sides' ends in the image; ``usable``: sides clear of
-    their neighbours. Returns (points in pad metres, unit image normals from
-    the bright side of each edge to the dark side, side index), or None.
-    """
-    # Each polygon's orientation in the image tells which way is outward;
-    # normals point from the bright side of an edge to the dark side.
-    cross = pa[:, 0] * pb[:, 1] - pb[:, 0] * pa[:, 1]
-    area = np.bincount(model.polygon, cross)
-    orient = np.where(area[model.polygon] > 0, 1.0, -1.0)
-    sign = np.where(model.bright, orient, -orient)
-    d = pb - pa
-    length = np.hypot(d[:, 0], d[:, 1])
-    # A curve's short sides are sampled anyway: its corners are not corners of
-    # the paint, only of the polygon tracing it.
-    ok = (length >= np.where(model.curved, 1.0, min_side_px)) & usable
-    points, side = model.samples
-    keep = ok[side]
-    if not keep.any():
-        return None
-    points, side = points[keep], side[keep]
-    u = d[side] / length[side][:, None]
-    normal = sign[side][:, None] * np.column_stack([u[:, 1], -u[:, 0]])
-    return points, normal, side
-
-
-_OFFSETS = np.arange(-8.0, 8.01, 0.5)
-
-
-def edge_offsets(img: np.ndarray, proj: np.ndarray, normal: np.ndarray, search: float):
-    """Signed distance along each normal from the projected point to the image edge."""
-    offsets = _OFFSETS[np.abs(_OFFSETS) <= search + 1e-6]
-    step = float(offsets[1] - offsets[0])
-    pts = proj[:, None, :] + offsets[None, :, None] * normal[:, None, :]
-    samples = cv2.remap(
-        img,
-        pts[..., 0].astype(np.float32),
-        pts[..., 1].astype(np.float32),
-        cv2.INTER_LINEAR,
-        borderMode=cv2.BORDER_REPLICATE,
-    )
-    grad = -np.diff(samples, axis=1)  # bright-to-dark along the normal is positive
-    k = np.argmax(grad, axis=1)
-    rows = np.arange(len(proj))
-    inside_image = (
-        (proj[:, 0] > 2)
-        & (proj[:, 1] > 2)
-        & (proj[:, 0] < img.shape[1] - 3)
-        & (proj[:, 1] < img.shape[0] - 3)
-    )
-    ok = (k > 0) & (k < grad.shape[1] - 1) & (grad[rows, k] > MIN_GRADIENT) & inside_image
-    kk = np.clip(k, 1, grad.shape[1] - 2)
-    g0, g1, g2 = grad[rows, kk - 1], grad[rows, kk], grad[rows, kk + 1]
-    den = g0 - 2 * g1 + g2
-    sub = np.where(np.abs(den) > 1e-9, 0.5 * (g0 - g2) / np.where(den == 0, 1.0, den), 0.0)
-    delta = offsets[0] + (kk + 0.5 + np.clip(sub, -0.5, 0.5)) * step
-    return delta, ok
+    return ends[:n], ends[n:], clearance_px >= min_clearance_px

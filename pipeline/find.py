@@ -3,13 +3,14 @@
 Every located H (``pipeline.candidates``) must then be clearly an H on a plain
 board (edge support and shape overlap, the region against the band around
 it), look like the reference picture around it (pattern and board), have no
-stroke cut through, and pass the optional verifier. The first that does is
-the pad's.
+stroke cut through, and pass the optional verifier. Those that do are offered
+best shape first; the first whose pose can be measured is the pad's.
 """
 
 from __future__ import annotations
 
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Protocol
 
@@ -17,19 +18,21 @@ import numpy as np
 
 from pipeline.camera import Camera
 from pipeline.candidates import (
+    MAX_LOCATED,
     MIN_BLOB_SEPARATION,
     MIN_EVIDENCE,
     MIN_FRAMED_EVIDENCE,
     MIN_H_AREA_PX,
     Located,
     blob_separation,
-    locate_all,
+    candidates,
+    locate,
 )
 from pipeline.homography_fit import apply_h
 from pipeline.measure import whole_pad
 from pipeline.preprocess import Binarized, binarize_channel, to_channel
 from pipeline.reference import Reference
-from pipeline.shapes import regions
+from pipeline.shapes import Region, regions
 from pipeline.strokes import MAX_DIP, deepest_dip, stroke_samples
 from pipeline.template import compare
 
@@ -37,6 +40,7 @@ MIN_TEMPLATE_NCC = 0.4  # with the reference picture around the H
 BOARD_TOLERANCE = 0.2  # the board's brightness relative to the H's, against the reference's
 SMALL_H_PX = 14.0  # an H this small counts only with the rest of its pad found
 MAX_HUE = 0.3  # the board's chromaticity, L1 distance to the reference's
+REJUDGE_BELOW_PX = 24.0  # marks smaller than this (frame pixels) are judged in every view
 
 
 class CandidateVerifier(Protocol):
@@ -47,7 +51,9 @@ class CandidateVerifier(Protocol):
 
 @dataclass
 class Tally:
-    """What the checks turned down in a frame, for the reason when nothing is found."""
+    """What the checks turned down in a frame, for the reason when nothing is found,
+    and where: a mark turned down is not judged again when another threshold or a
+    finer view of the frame shows it alike (see `Tally.judged`)."""
 
     shapes: int = 0
     located: int = 0
@@ -56,6 +62,7 @@ class Tally:
     unframed: int = 0
     broken: int = 0
     rejected: int = 0
+    turned_down: list[np.ndarray] = field(default_factory=list)  # frame boxes x0 y0 x1 y1
 
     def reason(self) -> str:
         if not self.shapes:
@@ -73,6 +80,22 @@ class Tally:
                 return why.format(count)
         return f"{self.located} H-shaped mark(s), but no pad's edges around them"
 
+    def judged(self, box: np.ndarray) -> bool:
+        """Whether a mark in ``box`` (frame pixels) was turned down already.
+
+        A mark large enough to judge at the search's resolution is judged the same
+        on another threshold's mask or a finer view: its fit and checks work on the
+        frame's levels, not on the mask. Smaller marks are judged again (a finer
+        view is what they need)."""
+        size = float(max(box[2] - box[0], box[3] - box[1]))
+        if size < REJUDGE_BELOW_PX:
+            return False
+        reach = max(1.5, 0.08 * size)
+        return any(float(np.abs(box - b).max()) <= reach for b in self.turned_down)
+
+    def turn_down(self, box: np.ndarray) -> None:
+        self.turned_down.append(box)
+
 
 @dataclass
 class Stages:
@@ -87,7 +110,7 @@ class Stages:
         self.t = now
 
 
-def find(
+def search(
     image: np.ndarray,
     reference: Reference,
     camera: Camera,
@@ -96,17 +119,20 @@ def find(
     verifier: CandidateVerifier | None,
     tally: Tally,
     stages: Stages,
+    to_frame: np.ndarray,
     tracking: bool = False,
     enlarged: float = 1.0,
-) -> tuple[Located, Binarized] | tuple[None, Binarized]:
-    """The pad's H in a view's image (BGR), with the view's binarized channel.
+) -> tuple[Binarized, Iterator[Located]]:
+    """The view's binarized channel, and the pad's H's it holds, best shape first,
+    found as they are asked for (the caller stops at the first it can measure).
 
-    ``tracking``: the view is the window where the pad was a moment ago: an H
-    found there that is clearly an H is the pad (a look-alike does not take
-    its place between two frames), so the comparisons with the reference
-    picture, there to turn down look-alikes at first sight, are skipped.
-    ``enlarged``: how many view pixels a frame pixel became (an interpolated
-    view holds no more detail: an H's size counts in the frame's pixels).
+    ``image``: the view's image (BGR); ``to_frame``: view pixels -> frame pixels
+    (a scale and a shift). ``tracking``: the view is the window where the pad was
+    a moment ago: an H found there that is clearly an H is the pad (a look-alike
+    does not take its place between two frames), so the comparisons with the
+    reference picture, there to turn down look-alikes at first sight, are
+    skipped. ``enlarged``: how many view pixels a frame pixel became (an
+    interpolated view holds no more detail: an H's size counts in the frame's pixels).
     """
     projection = reference.projection
     dark = projection.is_gray and projection.polarity == "dark"
@@ -116,24 +142,51 @@ def find(
     found = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=0.5 * area)
     tally.shapes += len(found)
     stages.lap("contours")
-    for hit in locate_all(found, binary, reference):
-        tally.located += 1
+    return binary, _hits(found, image, binary, reference, camera, verifier, tally, stages,
+                         to_frame, tracking, enlarged)  # fmt: skip
+
+
+def _hits(
+    found: list[Region],
+    image: np.ndarray,
+    binary: Binarized,
+    reference: Reference,
+    camera: Camera,
+    verifier: CandidateVerifier | None,
+    tally: Tally,
+    stages: Stages,
+    to_frame: np.ndarray,
+    tracking: bool,
+    enlarged: float,
+) -> Iterator[Located]:
+    for cand in candidates(found, reference, MAX_LOCATED):
+        contour = cand.region.contour
+        box = apply_h(to_frame, np.array([contour.min(axis=0), contour.max(axis=0)])).ravel()
+        if tally.judged(box):
+            continue
+        hit = locate(cand, binary, reference)
         stages.lap("corners")
+        if hit is None:
+            tally.turn_down(box)
+            continue
+        tally.located += 1
         verdict = _check(hit, image, binary, reference, full=not tracking, enlarged=enlarged)
         stages.lap("check")
         if verdict:
             setattr(tally, verdict, getattr(tally, verdict) + 1)
+            if verdict != "unclear":  # (the region's own levels: another mask may differ)
+                tally.turn_down(box)
             continue
         if verifier is not None:
             # Fitted corners: what the verifier sees does not depend on the threshold.
-            accepted = verifier.accepts(hit.corners, hit.candidate.region.contour, camera)
+            accepted = verifier.accepts(hit.corners, contour, camera)
             stages.lap("verify")
             if not accepted:
                 tally.rejected += 1
+                tally.turn_down(box)
                 continue
-        return hit, binary
+        yield hit
     stages.lap("corners")
-    return None, binary
 
 
 def _check(
@@ -162,9 +215,9 @@ def _check(
         # Strokes of 2 px or a motion blur leave an H's own evidence short of
         # MIN_EVIDENCE; it still counts when the rest of its pad is found around it
         # (which a look-alike mark on the floor has not).
-        if whole_pad(hit.fit.H, reference, binary.smooth, any_size=True) is hit.fit.H:
+        if whole_pad(hit.fit.H, reference, binary.levels, any_size=True) is hit.fit.H:
             return "unclear"
-    elif span < SMALL_H_PX and whole_pad(hit.fit.H, reference, binary.smooth) is hit.fit.H:
+    elif span < SMALL_H_PX and whole_pad(hit.fit.H, reference, binary.levels) is hit.fit.H:
         # A few pixels of H-shaped texture are everywhere: so small, the H is the
         # pad's only where the rest of the pad (its rim, bars, rings) is found too.
         return "unframed"

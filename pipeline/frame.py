@@ -19,7 +19,7 @@ import cv2
 import numpy as np
 
 from pipeline.camera import Camera
-from pipeline.find import CandidateVerifier, Stages, Tally, find
+from pipeline.find import CandidateVerifier, Stages, Tally, search
 from pipeline.homography_fit import apply_h
 from pipeline.measure import measure
 from pipeline.moments import shape_moments
@@ -106,14 +106,14 @@ def process_frame(
     cam = _camera_for(camera, image.shape[1], image.shape[0])
     stages = Stages()
     tally = Tally()
-    search = View.whole(image.shape, SEARCH_WIDTH_PX)
+    search_view = View.whole(image.shape, SEARCH_WIDTH_PX)
     mask = None
     # Where to look and how: around the last detection, then the whole frame,
     # then the whole frame again with the threshold that holds across shadows.
     tries = [("track", _tracking_view(prior, reference, image.shape), method)]
-    tries.append(("search", search, method))
+    tries.append(("search", search_view, method))
     if method == DEFAULT_METHOD:
-        tries.append(("search", search, FALLBACK_METHOD))
+        tries.append(("search", search_view, FALLBACK_METHOD))
     # A far pad: too small at the search's width, searched at the camera's own
     # resolution before giving up (native frames buy range), and a small frame
     # enlarged: a leg of 2-3 px keeps its shape and corners when interpolated.
@@ -121,7 +121,8 @@ def process_frame(
     for way, view, how in tries:
         if view is None:
             continue
-        hit, binary = find(
+        to_frame = np.linalg.inv(view.matrix)
+        binary, hits = search(
             view.image(image),
             reference,
             view.camera(cam),
@@ -129,52 +130,51 @@ def process_frame(
             verifier=verifier,
             tally=tally,
             stages=stages,
+            to_frame=to_frame,
             tracking=way == "track",
             enlarged=max(1.0, view.scale),
         )
-        mask = _mask_for(binary.mask, view, search)
-        if hit is None:
-            continue
-        to_frame = np.linalg.inv(view.matrix)
-        measured = measure(
-            image,
-            reference,
-            cam,
-            to_frame @ hit.fit.H,
-            gravity=gravity,
-            found=(view, binary.smooth),
-        )
-        stages.lap("pose")
-        if measured is None:
-            continue
-        fit = measured.fit
-        found_pose = to_pose(
-            fit.rvec, fit.tvec, fit.rms_px, reference.symmetric, measured.ambiguous
-        )
-        pose = pick_by_yaw(found_pose, yaw_hint)
-        # The corners as found on the frame (they do not depend on the camera
-        # model), numbered for the reported pose: corner i is where reference
-        # corner i lies; the twin of a symmetric pad numbers them 6 apart.
-        corners = apply_h(measured.H, reference.corners_m)
-        if pose is not found_pose:
-            corners = np.roll(corners, -6, axis=0)
-        contour = apply_h(to_frame, hit.candidate.region.contour.astype(np.float64))
-        mom = shape_moments(hit.candidate.region.contour)
-        stages.timings["total"] = (time.perf_counter() - t_start) * 1e3
-        return FrameResult(
-            detected=True,
-            corners_px=corners,
-            hu=tuple(float(v) for v in hit.candidate.hu),
-            orientation_deg=float(mom.orientation_deg),
-            eccentricity=float(mom.eccentricity),
-            pose=pose,
-            timings_ms=stages.timings,
-            contour_px=contour,
-            score=measured.support,
-            found_by=way,
-            homography=measured.H,
-            mask=mask,
-        )
+        mask = _mask_for(binary.mask, view, search_view)
+        for hit in hits:
+            measured = measure(
+                image,
+                reference,
+                cam,
+                to_frame @ hit.fit.H,
+                gravity=gravity,
+                found=(view, binary.levels),
+            )
+            stages.lap("pose")
+            if measured is None:  # no pose of the pad lying level fits it (from this start)
+                continue
+            fit = measured.fit
+            found_pose = to_pose(
+                fit.rvec, fit.tvec, fit.rms_px, reference.symmetric, measured.ambiguous
+            )
+            pose = pick_by_yaw(found_pose, yaw_hint)
+            # The corners as found on the frame (they do not depend on the camera
+            # model), numbered for the reported pose: corner i is where reference
+            # corner i lies; the twin of a symmetric pad numbers them 6 apart.
+            corners = apply_h(measured.H, reference.corners_m)
+            if pose is not found_pose:
+                corners = np.roll(corners, -6, axis=0)
+            contour = apply_h(to_frame, hit.candidate.region.contour.astype(np.float64))
+            mom = shape_moments(hit.candidate.region.contour)
+            stages.timings["total"] = (time.perf_counter() - t_start) * 1e3
+            return FrameResult(
+                detected=True,
+                corners_px=corners,
+                hu=tuple(float(v) for v in hit.candidate.hu),
+                orientation_deg=float(mom.orientation_deg),
+                eccentricity=float(mom.eccentricity),
+                pose=pose,
+                timings_ms=stages.timings,
+                contour_px=contour,
+                score=measured.support,
+                found_by=way,
+                homography=measured.H,
+                mask=mask,
+            )
     return _nothing(stages.timings, t_start, tally.reason(), mask)
 
 

@@ -16,7 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.edgefit import EdgeModel, edge_offsets, side_samples
+from pipeline.edge_kernels import MIN_DROP, homography_steps, side_support
+from pipeline.edgefit import EdgeModel
 
 MIN_SIDE_PX = 1.0  # a stroke end of a small H may be 2 px: still measured
 DAMPING = 1e-3
@@ -68,6 +69,11 @@ def fit_homography(
     sides_alike : weigh every side alike however many samples it has (for
         the H alone, whose stroke ends pin its height), or every sample alike.
 
+    Returns
+    -------
+    The fit after the step that found the most of the sides' edges, or None
+    when too few edges were found to take a step.
+
     Examples
     --------
     >>> import cv2
@@ -83,7 +89,7 @@ def fit_homography(
     >>> bool(np.abs(apply_h(fit.H, h) - apply_h(true, h)).max() < 0.25), fit.support > 0.9
     (True, True)
     """
-    img = image if image.dtype == np.float32 else image.astype(np.float32)
+    img = np.ascontiguousarray(image, np.float32)
     H = np.asarray(H0, np.float64) / H0[2, 2]
     # Condition the unknowns: pad metres and pixels both scaled to ~unit size.
     ends = np.vstack([model.a_m, model.b_m])
@@ -91,57 +97,39 @@ def fit_homography(
     sm = 1.0 / max(float(np.ptp(ends, axis=0).max()), 1e-9)
     Tm = np.array([[sm, 0, -sm * cm[0]], [0, sm, -sm * cm[1]], [0, 0, 1]])
     proj0 = apply_h(H, ends)
+    if not np.all(np.isfinite(proj0)):
+        return None
     cp = proj0.mean(axis=0)
     sp = 1.0 / max(float(np.ptp(proj0, axis=0).max()), 1e-9)
     Tp = np.array([[sp, 0, -sp * cp[0]], [0, sp, -sp * cp[1]], [0, 0, 1]])
     Hn = Tp @ H @ np.linalg.inv(Tm)
-    Hn = Hn / Hn[2, 2]
-    h = Hn.ravel()[:8].copy()
-    fitted = None
-    for it in range(iterations):
-        H = np.linalg.inv(Tp) @ _h_matrix(h) @ Tm
-        search = max(1.5, search_px / 2**it)  # wide first, then within 1.5 px
-        samples = _samples(model, H, MIN_CLEARANCE_PX)
-        if samples is None:
-            return None
-        pts_m, normal, side = samples
-        xn = apply_h(Tm, pts_m)
-        proj_n, jac_n = _project(h, xn)
-        proj = (proj_n - Tp[:2, 2]) / sp
-        delta, ok = edge_offsets(img, proj, normal, search)
-        if np.count_nonzero(ok) < 10:
-            return None
-        J_all = np.einsum("nk,nkp->np", normal, jac_n) / sp
-        r = -delta[ok]
-        J = J_all[ok]
-        keep = np.abs(r - np.median(r)) <= max(0.5, 3.0 * _mad(r))
-        r, J, sid = r[keep], J[keep], side[ok][keep]
-        if len(r) < 10:
-            return None
-        # Every side counts alike, however long: a stroke's end, a few pixels
-        # wide, is all that pins the H's height.
-        w = np.where(np.abs(r) <= 0.5, 1.0, 0.5 / np.maximum(np.abs(r), 1e-9))
-        if sides_alike:
-            w = w / np.bincount(sid, minlength=len(model.a_m))[sid]
-        JtW = J.T * w
-        A = JtW @ J
-        A += DAMPING * np.diag(np.diag(A)) + 1e-12 * np.eye(8)
-        try:
-            step = np.linalg.solve(A, -JtW @ r)
-        except np.linalg.LinAlgError:
-            return None
-        h = h + step
-        fitted = float(np.sqrt(np.mean((r + J @ step) ** 2)))
-        # Where each edge lies after this step: the support, without measuring again.
-        after = ok & (np.abs(delta - J_all @ step) <= 0.75)
-        last = (side, after, _in_view(proj, img.shape))
-        if it > 0 and np.abs(step).max() < 0.05 * sp:  # under ~0.05 px anywhere on the H
-            break
-    if fitted is None:
+    h0 = (Hn / Hn[2, 2]).ravel()[:8].copy()
+    pts_m, side = model.samples
+    h, fitted, found, ok = homography_steps(
+        img,
+        model.a_m,
+        model.b_m,
+        model.bright,
+        model.polygon,
+        model.clearance_m,
+        model.curved,
+        pts_m,
+        side,
+        Tm,
+        Tp,
+        h0,
+        iterations,
+        float(search_px),
+        sides_alike,
+        MIN_CLEARANCE_PX,
+        MIN_SIDE_PX,
+        DAMPING,
+        MIN_DROP,
+    )
+    if not ok:
         return None
-    H = np.linalg.inv(Tp) @ _h_matrix(h) @ Tm
+    H = np.linalg.inv(Tp) @ np.append(h, 1.0).reshape(3, 3) @ Tm
     H = H / H[2, 2]
-    found = _side_shares(len(model.a_m), *last)
     seen = np.isfinite(found)
     return HomographyFit(H, fitted, float(found[seen].mean()) if seen.any() else 0.0, found)
 
@@ -154,62 +142,25 @@ def support(
     Per side, so that a stroke's end, a few samples long, counts as much as a
     leg's side: an H stretched past its strokes' ends must not pass for found.
     """
-    samples = _samples(model, H, MIN_CLEARANCE_PX, min_side_px)
-    if samples is None:
-        return 0.0
-    pts_m, normal, side = samples
-    proj = apply_h(H, pts_m)
-    delta, ok = edge_offsets(image, proj, normal, 1.5)
-    found = _side_shares(
-        len(model.a_m), side, ok & (np.abs(delta) <= 0.75), _in_view(proj, image.shape)
+    H = np.asarray(H, np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        if not np.all(np.isfinite(apply_h(H, np.vstack([model.a_m, model.b_m])))):
+            return 0.0
+    pts_m, side = model.samples
+    found = side_support(
+        np.ascontiguousarray(image, np.float32),
+        model.a_m,
+        model.b_m,
+        model.bright,
+        model.polygon,
+        model.clearance_m,
+        model.curved,
+        pts_m,
+        side,
+        H,
+        MIN_CLEARANCE_PX,
+        float(min_side_px),
+        MIN_DROP,
     )
     seen = np.isfinite(found)
     return float(found[seen].mean()) if seen.any() else 0.0
-
-
-def _in_view(proj: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
-    h, w = shape[:2]
-    return (proj[:, 0] > 2) & (proj[:, 1] > 2) & (proj[:, 0] < w - 3) & (proj[:, 1] < h - 3)
-
-
-def _side_shares(n_sides: int, side: np.ndarray, hit: np.ndarray, seen: np.ndarray) -> np.ndarray:
-    """Per side, the share of its seen samples that hit an edge (nan: none seen)."""
-    n = np.bincount(side[seen], minlength=n_sides).astype(np.float64)
-    hits = np.bincount(side[seen], hit[seen].astype(np.float64), minlength=n_sides)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(n > 0, hits / n, np.nan)
-
-
-def _samples(
-    model: EdgeModel, H: np.ndarray, min_clearance_px: float, min_side_px: float = MIN_SIDE_PX
-):
-    n = len(model.a_m)
-    ends = apply_h(H, np.vstack([model.a_m, model.b_m]))
-    if not np.all(np.isfinite(ends)):
-        return None
-    pa, pb = ends[:n], ends[n:]
-    len_m = np.hypot(*(model.b_m - model.a_m).T)
-    len_px = np.hypot(*(pb - pa).T)
-    clearance_px = model.clearance_m * len_px / np.maximum(len_m, 1e-12)
-    return side_samples(model, pa, pb, clearance_px >= min_clearance_px, min_side_px)
-
-
-def _h_matrix(h: np.ndarray) -> np.ndarray:
-    return np.append(h, 1.0).reshape(3, 3)
-
-
-def _project(h: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Projected points (N x 2) and their Jacobian (N x 2 x 8) w.r.t. the 8 entries."""
-    X, Y = x[:, 0], x[:, 1]
-    w = h[6] * X + h[7] * Y + 1.0
-    u = (h[0] * X + h[1] * Y + h[2]) / w
-    v = (h[3] * X + h[4] * Y + h[5]) / w
-    z = np.zeros_like(X)
-    one = np.ones_like(X)
-    ju = np.stack([X, Y, one, z, z, z, -u * X, -u * Y], axis=1) / w[:, None]
-    jv = np.stack([z, z, z, X, Y, one, -v * X, -v * Y], axis=1) / w[:, None]
-    return np.column_stack([u, v]), np.stack([ju, jv], axis=1)
-
-
-def _mad(x: np.ndarray) -> float:
-    return float(1.4826 * np.median(np.abs(x - np.median(x))))

@@ -66,7 +66,7 @@ def measure(
 ) -> Measured | None:
     """Measure the pad located by ``H`` (pad metres -> pixels of ``frame``, whose
     camera is ``camera``). ``found``: the view the H was found in and its smoothed
-    channel, used again when it is already as fine as a measurement needs."""
+    channel (float32), used again when it is already as fine as a measurement needs."""
     outline = _pad_box_m(reference)
     px = apply_h(H, outline)
     span = float(np.ptp(px, axis=0).max())
@@ -75,21 +75,21 @@ def measure(
     if view is None:
         return None
     if found is not None and _covers(found[0], view):
-        view, smooth = found
+        view, levels = found
         Hv = view.matrix @ H
     else:
-        smooth = smooth_channel(view.image(frame), reference.projection)
+        levels = smooth_channel(view.image(frame), reference.projection).astype(np.float32)
         Hv = view.matrix @ H
-        refit = fit_homography(smooth.astype(np.float32), reference.h_edges, Hv, search_px=2.5)
+        refit = fit_homography(levels, reference.h_edges, Hv, search_px=2.5)
         if refit is not None:
             Hv = refit.H
     cam = view.camera(camera)
-    whole = whole_pad(Hv, reference, smooth)
+    whole = whole_pad(Hv, reference, levels)
     # With the pad's other marks found, or a lens whose distortion the
     # homography cannot follow, the pose is refined on the edges.
     polish = whole is not Hv or cam.has_distortion
-    Hv = _heading(whole, reference, smooth)
-    fitted = _fit_pose(reference, smooth, cam, Hv, polish=polish, gravity=gravity)
+    Hv = _heading(whole, reference, levels)
+    fitted = _fit_pose(reference, levels, cam, Hv, polish=polish, gravity=gravity)
     if fitted is None:
         return None
     fit, support, ambiguous = fitted
@@ -110,7 +110,7 @@ def _covers(found: View, need: View) -> bool:
 
 
 def whole_pad(
-    H: np.ndarray, reference: Reference, smooth: np.ndarray, *, any_size: bool = False
+    H: np.ndarray, reference: Reference, levels: np.ndarray, *, any_size: bool = False
 ) -> np.ndarray:
     """The homography refitted on the edges of the whole pad, when they are found.
 
@@ -127,9 +127,8 @@ def whole_pad(
     span = float(np.ptp(apply_h(H, reference.corners_m), axis=0).max())
     if model is None or (span > SELF_SUFFICIENT_PX and not any_size):
         return H
-    img = smooth.astype(np.float32)
     fit = fit_homography(
-        img, reference.edge_model, H, iterations=3, search_px=WIDE_SEARCH_PX, sides_alike=False
+        levels, reference.edge_model, H, iterations=3, search_px=WIDE_SEARCH_PX, sides_alike=False
     )
     if fit is None or _marks_found(fit, reference) < MIN_MARKS_FOUND:
         return H
@@ -153,7 +152,7 @@ def _marks_found(fit: HomographyFit, reference: Reference) -> float:
     return float(found.mean()) if len(found) else 0.0
 
 
-def _heading(H: np.ndarray, reference: Reference, smooth: np.ndarray) -> np.ndarray:
+def _heading(H: np.ndarray, reference: Reference, levels: np.ndarray) -> np.ndarray:
     """The homography (pad metres -> pixels) for the pad's heading.
 
     The H alone looks the same after a half turn; on a pad whose other marks
@@ -163,14 +162,13 @@ def _heading(H: np.ndarray, reference: Reference, smooth: np.ndarray) -> np.ndar
     model = reference.marks_model
     if reference.symmetric or model is None:
         return H
-    img = smooth.astype(np.float32)
     turned = H @ _HALF_TURN
-    return turned if edge_share(img, model, turned) > edge_share(img, model, H) else H
+    return turned if edge_share(levels, model, turned) > edge_share(levels, model, H) else H
 
 
 def _fit_pose(
     reference: Reference,
-    smooth: np.ndarray,
+    levels: np.ndarray,
     cam: Camera,
     H: np.ndarray,
     *,
@@ -214,7 +212,6 @@ def _fit_pose(
         cands[i] = (_rms(pts_m, px, cam, rvec, tvec), tilt_deg(rvec), rvec, tvec)
     if not cands:
         return None
-    img = smooth.astype(np.float32)
     ambiguous = False
     if gravity is not None:
         _, _, rvec, tvec = min(cands, key=lambda c: tilt_from_level_deg(c[2], gravity))
@@ -225,14 +222,14 @@ def _fit_pose(
         rms, _, rvec, tvec = cands[0]
         ambiguous = len(cands) > 1 and _tie(cands[0], cands[1]) and _apart(cands[0], cands[1])
         fit = EdgeFit(rvec, tvec, rms, len(pts_m), 0)
-    support = edge_support(img, reference.edge_model, cam, fit.rvec, fit.tvec)
+    support = edge_support(levels, reference.edge_model, cam, fit.rvec, fit.tvec)
     if polish:
-        refined = fit_edges(img, reference.edge_model, cam, fit.rvec, fit.tvec, search_px=1.5)
+        refined = fit_edges(levels, reference.edge_model, cam, fit.rvec, fit.tvec, search_px=1.5)
         level = refined is not None and (
             gravity is None or tilt_from_level_deg(refined.rvec, gravity) < MAX_TILT_OFF_DEG
         )
         if level:
-            better = edge_support(img, reference.edge_model, cam, refined.rvec, refined.tvec)
+            better = edge_support(levels, reference.edge_model, cam, refined.rvec, refined.tvec)
             if better >= support:  # a drift along a flat valley finds fewer edges
                 fit, support = refined, better
     if gravity is not None and tilt_from_level_deg(fit.rvec, gravity) > MAX_LEAN_DEG:

@@ -148,18 +148,15 @@ def refine_with_gravity(
     t = np.asarray(tvec, np.float64).reshape(3).copy()
     w_px = 1.0 / sigma_px
     w_g = 1.0 / np.radians(sigma_deg)
-    eps = 1e-6
+    J_g = np.zeros((3, 6))
     for _ in range(iterations):
         proj, jac = cv2.projectPoints(obj, r, t, camera.K, camera.dist)
         res_px = (proj.reshape(-1, 2) - img).ravel() * w_px
         J_px = jac[:, :6] * w_px
-        # The pad's up against gravity's opposite, two components across it.
-        res_g = (pad_normal_in_camera(r) + g) * w_g
-        J_g = np.zeros((3, 6))
-        for k in range(3):
-            dr = np.zeros(3)
-            dr[k] = eps
-            J_g[:, k] = ((pad_normal_in_camera(r + dr) + g) * w_g - res_g) / eps
+        # The pad's up (the rotation's third column) against gravity's opposite.
+        R, dR = cv2.Rodrigues(r)  # dR: d(R's 9 entries, row by row) / d(rvec), 3 x 9
+        res_g = (R[:, 2] + g) * w_g
+        J_g[:, :3] = dR[:, 2::3].T * w_g
         res = np.concatenate([res_px, res_g])
         J = np.vstack([J_px, J_g])
         A = J.T @ J + 1e-9 * np.eye(6)

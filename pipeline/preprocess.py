@@ -30,6 +30,7 @@ axis for a white H on an orange disc). Three thresholding methods, all selectabl
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -87,6 +88,11 @@ class Binarized:
     mask: np.ndarray
     threshold: float
 
+    @cached_property
+    def levels(self) -> np.ndarray:
+        """``smooth`` as float32, what the edge fits sample (converted once a view)."""
+        return self.smooth.astype(np.float32)
+
 
 def seed_enhance(gray: np.ndarray) -> np.ndarray:
     """The seed's Laplacian + average enhancement (MATLAB fspecial defaults), float32."""
@@ -127,11 +133,18 @@ def smooth_channel(image_bgr: np.ndarray, projection: Projection = GRAY) -> np.n
 def _log_light(channel: np.ndarray, dark: bool) -> np.ndarray:
     """The channel on a log scale of the light (uint8); ``dark``: the channel is
     inverted luma (a dark H made bright), whose light is 255 minus it."""
+    return cv2.LUT(channel, _LOG_DARK if dark else _LOG_LIGHT)
+
+
+def _log_table(dark: bool) -> np.ndarray:
     scale = 255.0 / np.log(256.0)
+    v = np.arange(256, dtype=np.float32)
     if dark:
-        light = 255.0 - channel.astype(np.float32)
-        return (255.0 - scale * np.log1p(light)).astype(np.uint8)
-    return (scale * np.log1p(channel.astype(np.float32))).astype(np.uint8)
+        return (255.0 - scale * np.log1p(255.0 - v)).astype(np.uint8)
+    return (scale * np.log1p(v)).astype(np.uint8)
+
+
+_LOG_LIGHT, _LOG_DARK = _log_table(False), _log_table(True)
 
 
 def _smooth(channel: np.ndarray) -> np.ndarray:

@@ -82,21 +82,16 @@ class ShapeMatcher:
         cluttered frame has a thousand regions). ``top``: only the best this many
         overlaps get their match, the rest None."""
         out: list[ShapeMatch | None] = [None] * len(contours_px)
-        todo: list[tuple[int, np.ndarray, np.ndarray]] = []
-        cells = []
-        for i, contour in enumerate(contours_px):
-            pts = np.asarray(contour, np.float64).reshape(-1, 2)
-            if len(pts) < 6:
-                continue
-            mean, cov = _polygon_moments(pts)
-            if not np.all(np.isfinite(cov)) or cov[0, 0] * cov[1, 1] - cov[0, 1] ** 2 <= 1e-9:
-                continue
-            w = _inv_sqrt(cov)
-            todo.append((i, mean, w))
-            cells.append(_raster((pts - mean) @ w.T).ravel())
-        if not todo:
+        listed = [np.asarray(c, np.float64).reshape(-1, 2) for c in contours_px]
+        index = np.array([i for i, p in enumerate(listed) if len(p) >= 6], int)
+        if not len(index):
             return out
-        cand = np.stack(cells, axis=1)  # (GRID * GRID, regions)
+        centres, whiten, cells = _whitened_rasters([listed[i] for i in index])
+        if not len(cells):
+            return out
+        rastered = np.nonzero(np.all(np.isfinite(whiten), axis=(1, 2)))[0]
+        todo = [(int(index[k]), centres[k], whiten[k]) for k in rastered]
+        cand = cells.reshape(len(cells), -1).T.astype(np.float32)  # (GRID * GRID, regions)
         inter = self.rasters @ cand
         iou = inter / np.maximum(self.areas[:, None] + cand.sum(axis=0)[None, :] - inter, 1e-9)
         best = np.argmax(iou, axis=0)
@@ -116,6 +111,58 @@ class ShapeMatcher:
             t = mean - lin @ (self.mean_m @ _FLIP)
             out[i] = ShapeMatch(float(best_iou[j]), np.hstack([lin, t[:, None]]))
         return out
+
+
+def _whitened_rasters(polygons: list[np.ndarray]):
+    """Every closed polygon (N_k x 2) whitened and filled on the GRID x GRID cells
+    (as `_raster` fills one), in one pass over all their points: their centroids
+    (K x 2), whitening maps (K x 2 x 2, nan for a degenerate polygon) and the
+    rasters of those that are not degenerate (in order)."""
+    counts = np.array([len(p) for p in polygons])
+    start = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    pts = np.concatenate(polygons)
+    nxt = np.roll(pts, -1, axis=0)
+    nxt[start + counts - 1] = pts[start]  # each polygon closes on its first point
+    x, y, x1, y1 = pts[:, 0], pts[:, 1], nxt[:, 0], nxt[:, 1]
+    cross = x * y1 - x1 * y
+    # Green's theorem: the moments of the area inside each polygon.
+    m00, m10, m01, m20, m02, m11 = (
+        np.add.reduceat(v * cross, start) / k
+        for v, k in (
+            (1.0, 2.0),
+            (x + x1, 6.0),
+            (y + y1, 6.0),
+            (x * x + x * x1 + x1 * x1, 12.0),
+            (y * y + y * y1 + y1 * y1, 12.0),
+            (x * y1 + 2.0 * x * y + 2.0 * x1 * y1 + x1 * y, 24.0),
+        )
+    )
+    with np.errstate(invalid="ignore", divide="ignore"):
+        safe = np.where(np.abs(m00) < 1e-12, np.nan, m00)
+        mean = np.column_stack([m10 / safe, m01 / safe])
+        a = (m20 / safe) - mean[:, 0] ** 2
+        b = (m11 / safe) - mean[:, 0] * mean[:, 1]
+        d = (m02 / safe) - mean[:, 1] ** 2
+        ok = np.isfinite(a + b + d) & (a * d - b * b > 1e-9)
+        # The inverse square root of each covariance, in closed form (`_inv_sqrt`).
+        sq = np.sqrt(np.maximum(a * d - b * b, 1e-24))
+        t = np.sqrt(a + d + 2.0 * sq)
+        p, q, r = (a + sq) / t, b / t, (d + sq) / t
+        det = p * r - q * q
+        whiten = np.stack([np.stack([r, -q], -1), np.stack([-q, p], -1)], 1) / det[:, None, None]
+    ok &= np.all(np.isfinite(whiten), axis=(1, 2))
+    whiten[~ok] = np.nan
+    region = np.repeat(np.arange(len(polygons)), counts)
+    centred = pts - np.nan_to_num(mean)[region]
+    w = np.nan_to_num(whiten)[region]
+    whitened = np.einsum("nij,nj->ni", w, centred)
+    grid = np.round(((whitened + EXTENT) * (GRID / (2 * EXTENT)) - 0.5) * (1 << _SHIFT))
+    grid = np.clip(grid, -(1 << 20), 1 << 20).astype(np.int32)
+    cells = np.zeros((int(ok.sum()), GRID, GRID), np.uint8)
+    for k, i in enumerate(np.nonzero(ok)[0]):
+        poly = grid[start[i] : start[i] + counts[i]].reshape(-1, 1, 2)
+        cv2.fillPoly(cells[k], [poly], 1, lineType=cv2.LINE_8, shift=_SHIFT)
+    return mean, whiten, cells
 
 
 def _polygon_moments(poly: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -16,9 +16,9 @@ from collections.abc import Callable
 
 import cv2
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
 
 from pipeline.homography_fit import apply_h
+from pipeline.jit import compiled
 
 STEP_PX = 1.0  # along each stroke's middle
 MAX_DIP = 0.35  # of the H's contrast: a deeper dip along a stroke's middle is a gap
@@ -119,15 +119,25 @@ def deepest_dip(image: np.ndarray, weights, samples) -> float:
     contrast = float(np.median(centre) - np.median(board[ok]))
     if contrast <= 0:
         return 1.0
+    return _deepest_dip(centre, np.asarray(samples[5], np.int64), contrast)
+
+
+@compiled
+def _deepest_dip(centre, counts, contrast):
+    """Along each stroke (``counts`` points each, one after another in ``centre``),
+    the deepest dip of a point under the brightest within w points before it and
+    the brightest within w points after it (w: a twelfth of the stroke, at least 2)."""
     worst = 0.0
     start = 0
-    for n in samples[5]:
-        c = centre[start : start + n]
-        start += n
+    for n in counts:
         w = max(2, n // 12)
-        # The brightest within w points before and after each point (itself included).
-        pad = np.full(w, -np.inf)
-        left = sliding_window_view(np.concatenate([pad, c]), w + 1).max(axis=1)
-        right = sliding_window_view(np.concatenate([c, pad]), w + 1).max(axis=1)
-        worst = max(worst, float(np.max(np.minimum(left, right) - c)) / contrast)
+        for i in range(n):
+            left = -np.inf
+            for k in range(max(0, i - w), i + 1):
+                left = max(left, centre[start + k])
+            right = -np.inf
+            for k in range(i, min(n, i + w + 1)):
+                right = max(right, centre[start + k])
+            worst = max(worst, (min(left, right) - centre[start + i]) / contrast)
+        start += n
     return worst

@@ -70,3 +70,5 @@ def test_dockerfile_runs_the_server_and_exposes_its_ports():
     assert "torch==2.13.0 --index-url https://download.pytorch.org/whl/cpu" in text
     assert "npm run build" in text and "frontend/dist" in text
     assert re.search(r"^USER visland$", text, re.M)  # not root
+    # numba's cache beside the installed package is root's: the user's own instead
+    assert re.search(r"^ENV NUMBA_CACHE_DIR=/home/visland/", text, re.M)

@@ -55,3 +55,34 @@ def test_degenerate_contours():
     matcher = ShapeMatcher.from_polygon(H)
     assert matcher.match(np.zeros((3, 2))) is None
     assert matcher.match(np.column_stack([np.arange(20.0), np.zeros(20)])) is None
+
+
+def test_rasters_of_many_regions_at_once_are_each_regions_own():
+    from pipeline.shape_match import _polygon_moments, _raster, _whitened_rasters
+
+    rng = np.random.default_rng(5)
+    polygons = [
+        _view(_dense(H), np.array([[900.0, 0.0, 320.0], [0.0, -900.0, 240.0]])),
+        _view(_dense(H), np.array([[600.0, 500.0, 100.0], [400.0, -700.0, 300.0]])),
+        _star(rng),
+        np.array([[0.0, 0.0], [10.0, 0.0], [20.0, 0.0], [30.0, 0.0], [5.0, 0.0], [1.0, 0.0]]),
+    ]
+    centres, whiten, cells = _whitened_rasters(polygons)
+    assert len(cells) == 3 and not np.isfinite(whiten[3]).any()  # the flat one is degenerate
+    # A self-crossing scribble's "covariance" need not be one: not rasterised either.
+    scribble = rng.uniform(0, 50, (30, 2))
+    _, w, scribbled = _whitened_rasters([scribble])
+    assert len(scribbled) == int(np.isfinite(w).all())
+    for k, poly in enumerate(polygons[:3]):
+        mean, cov = _polygon_moments(poly)
+        np.testing.assert_allclose(centres[k], mean, atol=1e-3)  # (cv2.moments: float32)
+        w = whiten[k]
+        np.testing.assert_allclose(w @ cov @ w.T, np.eye(2), atol=1e-4)  # it whitens
+        np.testing.assert_array_equal(cells[k], _raster((poly - mean) @ w.T))
+
+
+def _star(rng):
+    """A simple polygon of 40 points at random radii around a centre."""
+    a = np.sort(rng.uniform(0, 2 * np.pi, 40))
+    r = rng.uniform(10, 30, 40)
+    return np.column_stack([50 + r * np.cos(a), 50 + r * np.sin(a)])

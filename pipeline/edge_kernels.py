@@ -1,0 +1,460 @@
+"""The edge fits' inner loops, compiled (``pipeline.jit``): where a projected side's
+edge lies, the homography's Gauss-Newton steps, the pose's, and the share of a
+model's sides found on a picture's edges.
+
+Each fit measures a few hundred points a few times per frame: written as numpy
+expressions, each step was some forty calls on small arrays, whose overhead took
+most of a frame's time.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from pipeline.jit import compiled
+
+MIN_DROP = 4.0  # an edge: levels dropping at least this much over half a frame pixel
+STEP_PX = 0.5  # between the samples across an edge
+MAX_REACH_PX = 8.0  # the farthest a side's edge is looked for
+BORDER_PX = 2.0  # points this near the image's border (3 px on the far side) are not measured
+SUPPORT_PX = 0.75  # an edge this near where a side is put counts as found
+
+
+@compiled
+def _bilinear(img, x, y):
+    """``img`` at (x, y), bilinear, the border replicated (as cv2.remap's BORDER_REPLICATE)."""
+    h, w = img.shape
+    fx, fy = math.floor(x), math.floor(y)
+    ax, ay = x - fx, y - fy
+    x0 = min(max(int(fx), 0), w - 1)
+    x1 = min(max(int(fx) + 1, 0), w - 1)
+    y0 = min(max(int(fy), 0), h - 1)
+    y1 = min(max(int(fy) + 1, 0), h - 1)
+    top = img[y0, x0] * (1.0 - ax) + img[y0, x1] * ax
+    bottom = img[y1, x0] * (1.0 - ax) + img[y1, x1] * ax
+    return top * (1.0 - ay) + bottom * ay
+
+
+@compiled
+def in_view(x, y, h, w):
+    """Whether a point lies far enough inside an h x w image to be measured."""
+    return x > BORDER_PX and y > BORDER_PX and x < w - BORDER_PX - 1 and y < h - BORDER_PX - 1
+
+
+@compiled
+def edge_offsets(img, proj, normal, search, min_drop):
+    """Signed distance along each normal from each projected point to the image's
+    edge (bright to dark along the normal), sub-pixel, looked for within ``search``
+    pixels; and whether one was found.
+
+    The image is sampled every ``STEP_PX`` across the point; the edge is where the
+    level drops most between two samples (more than ``min_drop``: ``MIN_DROP`` on the
+    frame's own pixels, less on an enlarged view's), refined by a parabola through
+    the drops around it. A drop at the end of the search is not an edge found (it
+    may lie further out).
+    """
+    n = proj.shape[0]
+    h, w = img.shape
+    reach = min(search, MAX_REACH_PX)
+    half = math.floor(reach / STEP_PX + 1e-6)
+    count = 2 * half + 1
+    first = -half * STEP_PX
+    delta = np.zeros(n)
+    ok = np.zeros(n, np.bool_)
+    values = np.empty(count)
+    drops = np.empty(count - 1)
+    for i in range(n):
+        px, py = proj[i, 0], proj[i, 1]
+        nx, ny = normal[i, 0], normal[i, 1]
+        for k in range(count):
+            t = first + k * STEP_PX
+            values[k] = _bilinear(img, px + t * nx, py + t * ny)
+        best = 0
+        for k in range(count - 1):
+            drops[k] = values[k] - values[k + 1]
+            if drops[k] > drops[best]:
+                best = k
+        found = 0 < best < count - 2 and drops[best] > min_drop and in_view(px, py, h, w)
+        kk = min(max(best, 1), count - 3)
+        g0, g1, g2 = drops[kk - 1], drops[kk], drops[kk + 1]
+        den = g0 - 2.0 * g1 + g2
+        sub = 0.5 * (g0 - g2) / den if abs(den) > 1e-9 else 0.0
+        sub = min(max(sub, -0.5), 0.5)
+        delta[i] = first + (kk + 0.5 + sub) * STEP_PX
+        ok[i] = found
+    return delta, ok
+
+
+@compiled
+def _apply(H, x, y):
+    d = H[2, 0] * x + H[2, 1] * y + H[2, 2]
+    return (H[0, 0] * x + H[0, 1] * y + H[0, 2]) / d, (H[1, 0] * x + H[1, 1] * y + H[1, 2]) / d
+
+
+@compiled
+def _normals(pa, pb, bright, polygon, curved, usable, min_side_px):
+    """Per side of a model whose ends lie at ``pa``/``pb`` in the image: its unit
+    normal from the bright side of its edge to the dark side, and whether it is
+    measured (``usable``, and long enough in the image; a piece of a curve needs 1 px).
+    None is measured when an end lies at no finite pixel."""
+    s = pa.shape[0]
+    n_poly = 0
+    for j in range(s):
+        n_poly = max(n_poly, polygon[j] + 1)
+    # Each polygon's orientation in the image tells which way is outward.
+    area = np.zeros(n_poly)
+    for j in range(s):
+        area[polygon[j]] += pa[j, 0] * pb[j, 1] - pb[j, 0] * pa[j, 1]
+    normal = np.zeros((s, 2))
+    measured = np.zeros(s, np.bool_)
+    for j in range(s):
+        dx, dy = pb[j, 0] - pa[j, 0], pb[j, 1] - pa[j, 1]
+        length = math.sqrt(dx * dx + dy * dy)
+        if not math.isfinite(length):
+            measured[:] = False
+            return normal, measured
+        orient = 1.0 if area[polygon[j]] > 0 else -1.0
+        sign = orient if bright[j] else -orient
+        shortest = 1.0 if curved[j] else min_side_px
+        if usable[j] and length >= shortest and length > 0:
+            measured[j] = True
+            normal[j, 0] = sign * dy / length
+            normal[j, 1] = -sign * dx / length
+    return normal, measured
+
+
+@compiled
+def _side_normals(a_m, b_m, bright, polygon, clearance_m, curved, H, min_clearance_px, min_side_px):
+    """`_normals` of a model put in the image by the homography ``H``; a side is
+    usable when it lies at least ``min_clearance_px`` from a side alongside it."""
+    s = a_m.shape[0]
+    pa = np.empty((s, 2))
+    pb = np.empty((s, 2))
+    usable = np.empty(s, np.bool_)
+    for j in range(s):
+        pa[j, 0], pa[j, 1] = _apply(H, a_m[j, 0], a_m[j, 1])
+        pb[j, 0], pb[j, 1] = _apply(H, b_m[j, 0], b_m[j, 1])
+        len_m = max(math.hypot(b_m[j, 0] - a_m[j, 0], b_m[j, 1] - a_m[j, 1]), 1e-12)
+        len_px = math.hypot(pb[j, 0] - pa[j, 0], pb[j, 1] - pa[j, 1])
+        usable[j] = clearance_m[j] * len_px / len_m >= min_clearance_px
+    return _normals(pa, pb, bright, polygon, curved, usable, min_side_px)
+
+
+@compiled
+def _matmul3(A, B):
+    C = np.zeros((3, 3))
+    for i in range(3):
+        for j in range(3):
+            for k in range(3):
+                C[i, j] += A[i, k] * B[k, j]
+    return C
+
+
+@compiled
+def _dot(a, b):
+    acc = 0.0
+    for k in range(a.shape[0]):
+        acc += a[k] * b[k]
+    return acc
+
+
+@compiled
+def _solve(A, b):
+    """x with A x = b (Gaussian elimination, partial pivoting); ok False when singular."""
+    n = A.shape[0]
+    M = A.copy()
+    x = b.copy()
+    for c in range(n):
+        p = c
+        for r in range(c + 1, n):
+            if abs(M[r, c]) > abs(M[p, c]):
+                p = r
+        if abs(M[p, c]) < 1e-300:
+            return x, False
+        if p != c:
+            for k in range(n):
+                M[c, k], M[p, k] = M[p, k], M[c, k]
+            x[c], x[p] = x[p], x[c]
+        for r in range(c + 1, n):
+            f = M[r, c] / M[c, c]
+            for k in range(c, n):
+                M[r, k] -= f * M[c, k]
+            x[r] -= f * x[c]
+    for c in range(n - 1, -1, -1):
+        acc = x[c]
+        for k in range(c + 1, n):
+            acc -= M[c, k] * x[k]
+        x[c] = acc / M[c, c]
+    return x, True
+
+
+@compiled
+def _mad(x):
+    return 1.4826 * np.median(np.abs(x - np.median(x)))
+
+
+@compiled
+def homography_steps(
+    img,
+    a_m,
+    b_m,
+    bright,
+    polygon,
+    clearance_m,
+    curved,
+    pts_m,
+    pts_side,
+    Tm,
+    Tp,
+    h0,
+    iterations,
+    search_px,
+    sides_alike,
+    min_clearance_px,
+    min_side_px,
+    damping,
+    min_drop,
+):
+    """The Gauss-Newton steps of ``pipeline.homography_fit.fit_homography`` on the
+    normalised homography ``h0`` (8 entries, pad coordinates through ``Tm``, pixels
+    through ``Tp``). Returns, after the step that found the most of the sides' edges,
+    (h, rms of the inliers, per side the share of its seen samples on an edge (nan:
+    none seen)), and whether a step was taken at all."""
+    s = a_m.shape[0]
+    n = pts_m.shape[0]
+    ih, iw = img.shape
+    sp = Tp[0, 0]  # Tp scales pixels by sp and shifts them
+    Tp_inv = np.array(
+        [[1.0 / sp, 0.0, -Tp[0, 2] / sp], [0.0, 1.0 / sp, -Tp[1, 2] / sp], [0.0, 0.0, 1.0]]
+    )
+    # The samples in normalised pad coordinates (fixed through the fit).
+    xn = np.empty((n, 2))
+    for i in range(n):
+        xn[i, 0], xn[i, 1] = _apply(Tm, pts_m[i, 0], pts_m[i, 1])
+    h = h0.copy()
+    Hn = np.empty((3, 3))
+    found = np.full(s, np.nan)
+    # The step after which most of the sides' edges are found: on a small H, whose
+    # stroke ends have a few samples each, later steps may wander along a flat
+    # valley and lose a few of them.
+    best_h, best_rms, best_found, best_support = h0.copy(), -1.0, found.copy(), -1.0
+    proj = np.empty((n, 2))
+    normal = np.empty((n, 2))
+    J_all = np.empty((n, 8))
+    use = np.empty(n, np.bool_)
+    for it in range(iterations):
+        for k in range(8):
+            Hn[k // 3, k % 3] = h[k]
+        Hn[2, 2] = 1.0
+        H = _matmul3(_matmul3(Tp_inv, Hn), Tm)
+        search = max(1.5, search_px / 2.0**it)
+        side_n, measured = _side_normals(
+            a_m, b_m, bright, polygon, clearance_m, curved, H, min_clearance_px, min_side_px
+        )
+        m = 0
+        for i in range(n):
+            j = pts_side[i]
+            use[i] = measured[j]
+            if not use[i]:
+                continue
+            m += 1
+            X, Y = xn[i, 0], xn[i, 1]
+            wd = h[6] * X + h[7] * Y + 1.0
+            u = (h[0] * X + h[1] * Y + h[2]) / wd
+            v = (h[3] * X + h[4] * Y + h[5]) / wd
+            proj[i, 0] = (u - Tp[0, 2]) / sp
+            proj[i, 1] = (v - Tp[1, 2]) / sp
+            nx, ny = side_n[j, 0], side_n[j, 1]
+            normal[i, 0], normal[i, 1] = nx, ny
+            # d(normal . projection) / dh, in pixels.
+            J_all[i, 0] = nx * X / wd / sp
+            J_all[i, 1] = nx * Y / wd / sp
+            J_all[i, 2] = nx / wd / sp
+            J_all[i, 3] = ny * X / wd / sp
+            J_all[i, 4] = ny * Y / wd / sp
+            J_all[i, 5] = ny / wd / sp
+            J_all[i, 6] = -(nx * u + ny * v) * X / wd / sp
+            J_all[i, 7] = -(nx * u + ny * v) * Y / wd / sp
+        if m == 0:
+            return h, -1.0, found, False
+        idx = np.nonzero(use)[0]
+        delta, ok = edge_offsets(img, proj[idx], normal[idx], search, min_drop)
+        good = np.nonzero(ok)[0]
+        if len(good) < 10:
+            return h, -1.0, found, False
+        r = -delta[good]
+        med = np.median(r)
+        limit = max(0.5, 3.0 * _mad(r))
+        inl = good[np.abs(r - med) <= limit]
+        if len(inl) < 10:
+            return h, -1.0, found, False
+        per_side = np.zeros(s)
+        if sides_alike:
+            for q in inl:
+                per_side[pts_side[idx[q]]] += 1.0
+        A = np.zeros((8, 8))
+        g = np.zeros(8)
+        for q in inl:
+            ri = -delta[q]
+            wi = 1.0 if abs(ri) <= 0.5 else 0.5 / max(abs(ri), 1e-9)
+            if sides_alike:
+                wi /= per_side[pts_side[idx[q]]]
+            row = J_all[idx[q]]
+            for a in range(8):
+                g[a] -= wi * row[a] * ri
+                for b in range(a, 8):
+                    A[a, b] += wi * row[a] * row[b]
+        for a in range(8):
+            for b in range(a):
+                A[a, b] = A[b, a]
+        for a in range(8):
+            A[a, a] += damping * A[a, a] + 1e-12
+        step, solved = _solve(A, g)
+        if not solved:
+            return h, -1.0, found, False
+        h = h + step
+        acc = 0.0
+        for q in inl:
+            e = -delta[q] + _dot(J_all[idx[q]], step)
+            acc += e * e
+        fitted = math.sqrt(acc / len(inl))
+        # Where each edge lies after this step: the support, without measuring again.
+        seen_n = np.zeros(s)
+        hit_n = np.zeros(s)
+        for q in range(len(idx)):
+            i = idx[q]
+            if not in_view(proj[i, 0], proj[i, 1], ih, iw):
+                continue
+            j = pts_side[i]
+            seen_n[j] += 1.0
+            if ok[q] and abs(delta[q] - _dot(J_all[i], step)) <= SUPPORT_PX:
+                hit_n[j] += 1.0
+        total = 0.0
+        sides = 0
+        for j in range(s):
+            found[j] = hit_n[j] / seen_n[j] if seen_n[j] > 0 else np.nan
+            if seen_n[j] > 0:
+                total += found[j]
+                sides += 1
+        support = total / sides if sides else 0.0
+        if support >= best_support:
+            best_h, best_rms, best_found, best_support = h.copy(), fitted, found.copy(), support
+        if it > 0 and np.max(np.abs(step)) < 0.05 * sp:  # under ~0.05 px anywhere
+            break
+    return best_h, best_rms, best_found, best_rms >= 0.0
+
+
+@compiled
+def side_support(
+    img, a_m, b_m, bright, polygon, clearance_m, curved, pts_m, pts_side, H, min_clearance_px,
+    min_side_px, min_drop,
+):  # fmt: skip
+    """Per side of a model put in the image by ``H``, the share of its samples in view
+    that sit on an edge within ``SUPPORT_PX`` of it (nan: none in view or measured)."""
+    s = a_m.shape[0]
+    ih, iw = img.shape
+    found = np.full(s, np.nan)
+    side_n, measured = _side_normals(
+        a_m, b_m, bright, polygon, clearance_m, curved, H, min_clearance_px, min_side_px
+    )
+    idx = np.nonzero(measured[pts_side])[0]
+    proj = np.empty((len(idx), 2))
+    normal = np.empty((len(idx), 2))
+    for q in range(len(idx)):
+        i = idx[q]
+        proj[q, 0], proj[q, 1] = _apply(H, pts_m[i, 0], pts_m[i, 1])
+        normal[q] = side_n[pts_side[i]]
+    delta, ok = edge_offsets(img, proj, normal, 1.5, min_drop)
+    seen_n = np.zeros(s)
+    hit_n = np.zeros(s)
+    for q in range(len(idx)):
+        if not in_view(proj[q, 0], proj[q, 1], ih, iw):
+            continue
+        j = pts_side[idx[q]]
+        seen_n[j] += 1.0
+        if ok[q] and abs(delta[q]) <= SUPPORT_PX:
+            hit_n[j] += 1.0
+    for j in range(s):
+        if seen_n[j] > 0:
+            found[j] = hit_n[j] / seen_n[j]
+    return found
+
+
+@compiled
+def pose_step(
+    img, pa, pb, bright, polygon, curved, usable, pts_side, proj, jac, search, min_side_px,
+    min_drop,
+):  # fmt: skip
+    """One Gauss-Newton step of ``pipeline.edgefit.fit_edges``: the model's sides lie
+    at ``pa``/``pb`` in the image, its samples at ``proj`` with ``jac`` (N x 2 x 6) their
+    derivatives by the pose (rvec, tvec). Returns (step, rms of the inliers after it,
+    inliers, sides they lie on, whether there were enough edges to take it)."""
+    step = np.zeros(6)
+    side_n, measured = _normals(pa, pb, bright, polygon, curved, usable, min_side_px)
+    idx = np.nonzero(measured[pts_side])[0]
+    normal = np.empty((len(idx), 2))
+    for q in range(len(idx)):
+        normal[q] = side_n[pts_side[idx[q]]]
+    delta, ok = edge_offsets(img, proj[idx], normal, search, min_drop)
+    good = np.nonzero(ok)[0]
+    if len(good) < 12:
+        return step, -1.0, 0, 0, False
+    r = -delta[good]
+    inl = good[np.abs(r - np.median(r)) <= max(0.5, 3.0 * _mad(r))]
+    if len(inl) < 12:
+        return step, -1.0, 0, 0, False
+    J = np.empty((len(inl), 6))
+    A = np.zeros((6, 6))
+    g = np.zeros(6)
+    sides = np.zeros(pa.shape[0], np.bool_)
+    for k in range(len(inl)):
+        q = inl[k]
+        i = idx[q]
+        sides[pts_side[i]] = True
+        for a in range(6):
+            J[k, a] = normal[q, 0] * jac[i, 0, a] + normal[q, 1] * jac[i, 1, a]
+        ri = -delta[q]
+        # Huber weights keep a few wrong edge hits from pulling the pose.
+        wi = 1.0 if abs(ri) <= 0.5 else 0.5 / max(abs(ri), 1e-9)
+        for a in range(6):
+            g[a] -= wi * J[k, a] * ri
+            for b in range(a, 6):
+                A[a, b] += wi * J[k, a] * J[k, b]
+    for a in range(6):
+        A[a, a] += 1e-9
+        for b in range(a):
+            A[a, b] = A[b, a]
+    step, solved = _solve(A, g)
+    if not solved:
+        return np.zeros(6), -1.0, 0, 0, False
+    acc = 0.0
+    for k in range(len(inl)):
+        e = -delta[inl[k]] + _dot(J[k], step)
+        acc += e * e
+    return step, math.sqrt(acc / len(inl)), len(inl), int(sides.sum()), True
+
+
+@compiled
+def pose_support(
+    img, pa, pb, bright, polygon, curved, usable, pts_side, proj, min_side_px, min_drop
+):
+    """Of the samples in view on the model's measured sides (see `pose_step`), the
+    share that sit on an edge within ``SUPPORT_PX`` of where the pose puts them."""
+    ih, iw = img.shape
+    side_n, measured = _normals(pa, pb, bright, polygon, curved, usable, min_side_px)
+    idx = np.nonzero(measured[pts_side])[0]
+    normal = np.empty((len(idx), 2))
+    for q in range(len(idx)):
+        normal[q] = side_n[pts_side[idx[q]]]
+    delta, ok = edge_offsets(img, proj[idx], normal, 1.5, min_drop)
+    seen = 0
+    hit = 0
+    for q in range(len(idx)):
+        i = idx[q]
+        if in_view(proj[i, 0], proj[i, 1], ih, iw):
+            seen += 1
+            if ok[q] and abs(delta[q]) <= SUPPORT_PX:
+                hit += 1
+    return hit / seen if seen > 0 else 0.0

@@ -1,0 +1,89 @@
+"""The compiled edge loops against plain numpy statements of the same arithmetic."""
+
+import cv2
+import numpy as np
+import pytest
+
+from pipeline.edge_kernels import MIN_DROP, STEP_PX, edge_offsets
+from pipeline.edgefit import EdgeModel
+from pipeline.homography_fit import apply_h, fit_homography, support
+from pipeline.render import PadGeometry
+
+
+def _bilinear(img, x, y):
+    h, w = img.shape
+    x0, y0 = np.floor(x), np.floor(y)
+    ax, ay = x - x0, y - y0
+    xi = [np.clip(x0 + d, 0, w - 1).astype(int) for d in (0, 1)]
+    yi = [np.clip(y0 + d, 0, h - 1).astype(int) for d in (0, 1)]
+    top = img[yi[0], xi[0]] * (1 - ax) + img[yi[0], xi[1]] * ax
+    bottom = img[yi[1], xi[0]] * (1 - ax) + img[yi[1], xi[1]] * ax
+    return top * (1 - ay) + bottom * ay
+
+
+def _numpy_offsets(img, proj, normal, search):
+    """The strongest bright-to-dark drop across each point (the kernel's contract)."""
+    offsets = np.arange(-search, search + 1e-9, STEP_PX)
+    pts = proj[:, None, :] + offsets[None, :, None] * normal[:, None, :]
+    values = _bilinear(img.astype(np.float64), pts[..., 0], pts[..., 1])
+    drops = values[:, :-1] - values[:, 1:]
+    k = np.argmax(drops, axis=1)
+    rows = np.arange(len(proj))
+    inside = (proj[:, 0] > 2) & (proj[:, 1] > 2)
+    inside &= (proj[:, 0] < img.shape[1] - 3) & (proj[:, 1] < img.shape[0] - 3)
+    ok = (k > 0) & (k < drops.shape[1] - 1) & (drops[rows, k] > MIN_DROP) & inside
+    kk = np.clip(k, 1, drops.shape[1] - 2)
+    g0, g1, g2 = drops[rows, kk - 1], drops[rows, kk], drops[rows, kk + 1]
+    den = g0 - 2 * g1 + g2
+    sub = np.where(np.abs(den) > 1e-9, 0.5 * (g0 - g2) / np.where(den == 0, 1, den), 0.0)
+    return offsets[0] + (kk + 0.5 + np.clip(sub, -0.5, 0.5)) * STEP_PX, ok
+
+
+@pytest.mark.parametrize("search", [1.5, 2.5, 6.0])
+def test_edge_offsets_match_the_numpy_statement(search):
+    rng = np.random.default_rng(3)
+    img = cv2.GaussianBlur(rng.uniform(0, 255, (60, 80)).astype(np.float32), (5, 5), 1.0)
+    proj = rng.uniform(-5, 85, (400, 2))
+    angle = rng.uniform(0, 2 * np.pi, 400)
+    normal = np.column_stack([np.cos(angle), np.sin(angle)])
+    delta, ok = edge_offsets(img, proj, normal, search, MIN_DROP)
+    want_delta, want_ok = _numpy_offsets(img, proj, normal, search)
+    np.testing.assert_array_equal(ok, want_ok)
+    np.testing.assert_allclose(delta[ok], want_delta[ok], atol=1e-4)
+    assert ok.sum() > 50
+
+
+def test_an_edge_is_found_where_it_is_and_only_with_the_right_polarity():
+    img = np.zeros((40, 40), np.float32)
+    img[:, :20] = 200.0  # bright left half: the edge lies at x = 19.5
+    img = cv2.GaussianBlur(img, (5, 5), 1.0)
+    proj = np.array([[17.0, 20.0], [17.0, 20.0]])
+    normal = np.array([[1.0, 0.0], [-1.0, 0.0]])  # bright to dark, and the other way
+    delta, ok = edge_offsets(img, proj, normal, 3.0, MIN_DROP)
+    assert ok.tolist() == [True, False]
+    assert abs(17.0 + delta[0] - 19.5) < 0.05
+    # A drop under the least that counts is no edge.
+    faint = np.clip(img, 0, 2.0)
+    assert not edge_offsets(faint, proj, normal, 3.0, MIN_DROP)[1].any()
+
+
+def test_fit_homography_recovers_a_drawn_h_and_support_finds_its_sides():
+    h = PadGeometry().h_corners_m
+    true = np.array([[700.0, 80, 330], [-60, -650, 250], [0.05, 0.08, 1]])
+    big = np.zeros((480 * 8, 640 * 8), np.float32)
+    pts = np.round(((apply_h(true, h) + 0.5) * 8 - 0.5) * 16).astype(np.int32)
+    cv2.fillPoly(big, [pts], 180, shift=4)
+    img = cv2.resize(big, (640, 480), interpolation=cv2.INTER_AREA) + 30.0
+    model = EdgeModel.from_polygons([(h, True)])
+    start = true.copy()
+    start[0, 2] += 2.0
+    start[1, 0] *= 0.97
+    fit = fit_homography(img, model, start)
+    assert fit is not None and fit.support > 0.95
+    assert np.abs(apply_h(fit.H, h) - apply_h(true, h)).max() < 0.2
+    assert support(img, model, true) > 0.95
+    moved = true.copy()
+    moved[0, 2] += 3.0
+    assert support(img, model, moved) < 0.6
+    # A model put nowhere finite is not found at all.
+    assert support(img, model, np.diag([1.0, 1.0, 0.0])) == 0.0
