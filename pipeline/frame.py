@@ -1,13 +1,15 @@
 """process_frame: from one camera frame to the H, its invariants and the pose.
 
 Where the pipeline looks: when the caller hands in the last result (``prior``),
-first a window around where the pad was, at a resolution where the H spans
-about ``TRACK_SPAN_PX``; when that finds nothing, the whole frame at a
-working width of ``SEARCH_WIDTH_PX``, and last at ``FAR_SEARCH_WIDTH_PX`` or the
-frame's own resolution if finer (a far pad is too small at the working width).
-Whatever finds the H (``pipeline.find``), the pad is then measured at the
-frame's own resolution around it, or on the enlarged view that found it
-(``pipeline.measure``). The result says which way found it.
+first the H's sides where they were (followed: fitted to the edges nearby, which
+is all a pad moved by a few pixels needs); then a window around where the pad
+was, at a resolution where the H spans about ``TRACK_SPAN_PX``; when that finds
+nothing, the whole frame at a working width of ``SEARCH_WIDTH_PX``, and last at
+``FAR_SEARCH_WIDTH_PX`` or the frame's own resolution if finer (a far pad is too
+small at the working width). Whatever finds the H (``pipeline.find``), the pad is
+then measured at the frame's own resolution around it, or on the enlarged view
+that found it (``pipeline.measure``). The result says which way found it
+(``found_by``: "follow", "track" or "search").
 """
 
 from __future__ import annotations
@@ -20,11 +22,18 @@ import numpy as np
 
 from pipeline.camera import Camera
 from pipeline.find import CandidateVerifier, Stages, Tally, search
-from pipeline.homography_fit import apply_h
-from pipeline.measure import measure
+from pipeline.homography_fit import apply_h, fit_homography
+from pipeline.measure import MEASURE_SPAN_PX, Measured, measure, pad_box_m
 from pipeline.moments import shape_moments
 from pipeline.pose import pick_by_yaw, to_pose
-from pipeline.preprocess import DEFAULT_METHOD, METHODS, check_image
+from pipeline.preprocess import (
+    DEFAULT_METHOD,
+    METHODS,
+    Binarized,
+    binarize_channel,
+    check_image,
+    to_channel,
+)
 from pipeline.reference import SEARCH_WIDTH_PX, Reference
 from pipeline.result import FrameResult
 from pipeline.view import View, enlargement
@@ -33,6 +42,10 @@ FALLBACK_METHOD = "shadow"  # tried when the default threshold finds nothing
 TRACK_SPAN_PX = 100.0  # a tracked H is looked for at a scale where it spans about this
 FAR_SEARCH_WIDTH_PX = 1280  # the last search: narrower frames enlarged toward it (view.py)
 TRACK_REACH = 0.5  # the tracking window: the pad's last box grown by this much of its size
+FOLLOW_REACH_PX = 6.0  # a followed H's sides are looked for this far from where they were
+FOLLOW_COARSE_SPAN_PX = 120.0  # a larger pad is first followed on a view where it spans this
+FOLLOW_SUPPORT = 0.9  # the share of the H's sides found again for a followed H to count
+MAX_FOLLOW_GROWTH = 1.25  # and its size may change by this factor between two frames
 
 __all__ = ["CandidateVerifier", "process_frame"]
 
@@ -88,7 +101,7 @@ def process_frame(
     >>> res.detected, np.round(res.pose.position_m, 1).tolist(), res.found_by
     (True, [0.1, -0.2, 3.0], 'search')
     >>> process_frame(frame, ref, cam, yaw_hint=30.0, prior=res).found_by
-    'track'
+    'follow'
     """
     t_start = time.perf_counter()
     image = check_image(image_bgr, "image_bgr")
@@ -118,6 +131,18 @@ def process_frame(
     # resolution before giving up (native frames buy range), and a small frame
     # enlarged: a leg of 2-3 px keeps its shape and corners when interpolated.
     tries.append(("search", View.enlarged(image.shape, FAR_SEARCH_WIDTH_PX), method))
+    followed = _follow(prior, image, reference, method)
+    if followed is not None:
+        view, binary, H = followed
+        mask = _mask_for(binary.mask, view, search_view)
+        stages.lap("follow")
+        measured = measure(image, reference, cam, H, gravity=gravity, found=(view, binary.levels))
+        stages.lap("pose")
+        if measured is not None:
+            outline = apply_h(measured.H, reference.corners_m)
+            return _detected(
+                measured, reference, outline, yaw_hint, "follow", mask, stages, t_start
+            )
     for way, view, how in tries:
         if view is None:
             continue
@@ -147,35 +172,103 @@ def process_frame(
             stages.lap("pose")
             if measured is None:  # no pose of the pad lying level fits it (from this start)
                 continue
-            fit = measured.fit
-            found_pose = to_pose(
-                fit.rvec, fit.tvec, fit.rms_px, reference.symmetric, measured.ambiguous
-            )
-            pose = pick_by_yaw(found_pose, yaw_hint)
-            # The corners as found on the frame (they do not depend on the camera
-            # model), numbered for the reported pose: corner i is where reference
-            # corner i lies; the twin of a symmetric pad numbers them 6 apart.
-            corners = apply_h(measured.H, reference.corners_m)
-            if pose is not found_pose:
-                corners = np.roll(corners, -6, axis=0)
             contour = apply_h(to_frame, hit.candidate.region.contour.astype(np.float64))
-            mom = shape_moments(hit.candidate.region.contour)
-            stages.timings["total"] = (time.perf_counter() - t_start) * 1e3
-            return FrameResult(
-                detected=True,
-                corners_px=corners,
-                hu=tuple(float(v) for v in hit.candidate.hu),
-                orientation_deg=float(mom.orientation_deg),
-                eccentricity=float(mom.eccentricity),
-                pose=pose,
-                timings_ms=stages.timings,
-                contour_px=contour,
-                score=measured.support,
-                found_by=way,
-                homography=measured.H,
-                mask=mask,
-            )
+            return _detected(measured, reference, contour, yaw_hint, way, mask, stages, t_start)
     return _nothing(stages.timings, t_start, tally.reason(), mask)
+
+
+def _detected(
+    measured: Measured,
+    reference: Reference,
+    contour: np.ndarray,
+    yaw_hint: float | None,
+    way: str,
+    mask: np.ndarray | None,
+    stages: Stages,
+    t_start: float,
+) -> FrameResult:
+    """The result for a measured pad whose H's outline on the frame is ``contour``."""
+    fit = measured.fit
+    found_pose = to_pose(fit.rvec, fit.tvec, fit.rms_px, reference.symmetric, measured.ambiguous)
+    pose = pick_by_yaw(found_pose, yaw_hint)
+    # The corners as found on the frame (they do not depend on the camera
+    # model), numbered for the reported pose: corner i is where reference
+    # corner i lies; the twin of a symmetric pad numbers them 6 apart.
+    corners = apply_h(measured.H, reference.corners_m)
+    if pose is not found_pose:
+        corners = np.roll(corners, -6, axis=0)
+    mom = shape_moments(contour)
+    stages.timings["total"] = (time.perf_counter() - t_start) * 1e3
+    return FrameResult(
+        detected=True,
+        corners_px=corners,
+        hu=tuple(float(v) for v in mom.hu),
+        orientation_deg=float(mom.orientation_deg),
+        eccentricity=float(mom.eccentricity),
+        pose=pose,
+        timings_ms=stages.timings,
+        contour_px=contour,
+        score=measured.support,
+        found_by=way,
+        homography=measured.H,
+        mask=mask,
+    )
+
+
+def _follow(
+    prior: FrameResult | None, image: np.ndarray, reference: Reference, method: str
+) -> tuple[View, Binarized, np.ndarray] | None:
+    """The H followed from the last frame: its sides fitted to the edges near where
+    they were, in a window at the measurement's scale. A pad moves a few pixels
+    between frames; when nearly all of the H's sides are found again (and its size
+    holds), it is the same H, and the search's steps are not needed. A large pad,
+    which moves more pixels, is first followed on a coarser view. Returns the
+    window, its binarized channel (the threshold view's mask) and the H's homography
+    in frame pixels, or None (the search takes over)."""
+    if prior is None or not prior.detected or prior.homography is None:
+        return None
+    H = prior.homography
+    span = _pad_span_px(H, reference)
+    if not math.isfinite(span) or span < 1.0:
+        return None
+    if span > 1.5 * FOLLOW_COARSE_SPAN_PX:
+        coarse = _fit_near(image, reference, H, FOLLOW_COARSE_SPAN_PX / span, method)
+        if coarse is None:
+            return None
+        H = coarse[2]
+    return _fit_near(image, reference, H, MEASURE_SPAN_PX / span, method)
+
+
+def _fit_near(
+    image: np.ndarray, reference: Reference, H: np.ndarray, scale: float, method: str
+) -> tuple[View, Binarized, np.ndarray] | None:
+    """The H's sides fitted within ``FOLLOW_REACH_PX`` (at ``scale``, at most 1) of
+    where ``H`` (pad metres -> frame pixels) puts them: the window, its binarized
+    channel and the fitted homography, or None when they are not found again."""
+    was = apply_h(H, pad_box_m(reference))
+    span = float(np.ptp(was, axis=0).max())
+    box = np.concatenate([was.min(axis=0), was.max(axis=0)])
+    grow = 0.1 * span + FOLLOW_REACH_PX / min(scale, 1.0)
+    view = View.around(box, image.shape, grow, scale)
+    if view is None:
+        return None
+    projection = reference.projection
+    dark = projection.is_gray and projection.polarity == "dark"
+    binary = binarize_channel(to_channel(view.image(image), projection), method, dark=dark)
+    start = view.matrix @ H
+    fit = fit_homography(binary.levels, reference.h_edges, start, search_px=FOLLOW_REACH_PX)
+    if fit is None or fit.support < FOLLOW_SUPPORT:
+        return None
+    size = float(np.ptp(apply_h(fit.H, reference.corners_m), axis=0).max())
+    size_was = float(np.ptp(apply_h(start, reference.corners_m), axis=0).max())
+    if not 1 / MAX_FOLLOW_GROWTH <= size / max(size_was, 1e-9) <= MAX_FOLLOW_GROWTH:
+        return None
+    return view, binary, np.linalg.inv(view.matrix) @ fit.H
+
+
+def _pad_span_px(H: np.ndarray, reference: Reference) -> float:
+    px = apply_h(H, pad_box_m(reference))
+    return float(np.ptp(px, axis=0).max()) if np.all(np.isfinite(px)) else math.nan
 
 
 def _tracking_view(
@@ -185,8 +278,7 @@ def _tracking_view(
     ``TRACK_SPAN_PX``; None without a prior detection."""
     if prior is None or not prior.detected or prior.homography is None:
         return None
-    w, h = reference.pad_size_m / 2, reference.pad_height_m / 2
-    px = apply_h(prior.homography, np.array([[-w, h], [w, h], [w, -h], [-w, -h]]))
+    px = apply_h(prior.homography, pad_box_m(reference))
     if not np.all(np.isfinite(px)):
         return None
     span = float(np.ptp(px, axis=0).max())

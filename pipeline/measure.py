@@ -67,7 +67,7 @@ def measure(
     """Measure the pad located by ``H`` (pad metres -> pixels of ``frame``, whose
     camera is ``camera``). ``found``: the view the H was found in and its smoothed
     channel (float32), used again when it is already as fine as a measurement needs."""
-    outline = _pad_box_m(reference)
+    outline = pad_box_m(reference)
     px = apply_h(H, outline)
     span = float(np.ptp(px, axis=0).max())
     box = np.concatenate([px.min(axis=0), px.max(axis=0)])
@@ -96,7 +96,8 @@ def measure(
     return Measured(np.linalg.inv(view.matrix) @ Hv, fit, support, ambiguous)
 
 
-def _pad_box_m(reference: Reference) -> np.ndarray:
+def pad_box_m(reference: Reference) -> np.ndarray:
+    """The pad's outer corners (4 x 2 metres)."""
     w, h = reference.pad_size_m / 2, reference.pad_height_m / 2
     return np.array([[-w, h], [w, h], [w, -h], [-w, -h]])
 

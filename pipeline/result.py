@@ -67,8 +67,9 @@ class FrameResult:
     invariants of the H's region (NaN, JSON null, when nothing was found).
     ``timings_ms``: wall time per stage. ``contour_px``: the H's boundary.
     ``score``: the share of the pad's edges found where the pose puts them
-    (0..1). ``reason``: why nothing was detected. ``found_by``: "track" (in a
-    window around where the pad was) or "search" (the whole frame).
+    (0..1). ``reason``: why nothing was detected. ``found_by``: "follow" (the
+    H's sides fitted again where they were in the last frame), "track" (searched
+    in a window around where the pad was) or "search" (the whole frame).
     ``homography``: pad metres -> frame pixels, for tracking the pad in the next
     frame. ``mask``: the threshold mask the pipeline searched with (uint8, 0/255,
     at its search size: frames wider than 640 px are searched subsampled), for

@@ -54,8 +54,9 @@ class FrameResult(Model):
     score: float | None
     reason: str
     found_by: str = Field(
-        description='"track": in a window around where the pad was; "search": the whole '
-        'frame; "" when nothing was found'
+        description='"follow": the H\'s sides fitted again where they were in the last frame; '
+        '"track": searched in a window around where the pad was; "search": the whole frame; '
+        '"" when nothing was found'
     )
 
 

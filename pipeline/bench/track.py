@@ -56,7 +56,7 @@ def run_track(*, frames: int = 60, seed: int = 0, design: str = "default") -> di
             process_frame(frame, reference, camera, gravity_hint=g)
             cold.append((time.perf_counter() - t0) * 1e3)
             ways.append(res.found_by or "missed")
-            if res.found_by == "track":
+            if res.found_by in ("follow", "track"):
                 tracked.append(dt)
             view = _View(position, R)
             tally.score(res.detected and res.pose is not None, res.pose, view, d.symmetric)

@@ -1,4 +1,4 @@
-"""A far pad on a small frame: found on the frame enlarged, then tracked enlarged.
+"""A far pad on a small frame: found on the frame enlarged, then followed or tracked.
 
 With the vehicle's attitude and heading as hints, as the station gives them: so far
 away the two planar poses fit the pixels alike.
@@ -9,6 +9,8 @@ to twice the size, the H keeps its shape and corners (`pipeline.frame`'s last se
 """
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 import pytest
@@ -48,11 +50,18 @@ def test_a_pad_18_m_away_is_found_and_its_position_measured(reference):
     assert np.median(found) < 0.04, found
 
 
-def test_a_far_pad_once_found_is_tracked_in_an_enlarged_window(reference):
+def test_a_far_pad_once_found_is_followed_or_tracked_in_an_enlarged_window(reference):
     frame, _, hints = next(_frames(15.0, 1))
     first = process_frame(frame, reference, CAM, **hints)
     assert first.detected and first.found_by == "search"
     again = process_frame(frame, reference, CAM, prior=first, **hints)
+    assert again.found_by == "follow"  # its sides found again where they were
+    np.testing.assert_allclose(again.corners_px, first.corners_px, atol=0.5)
+    # Moved further than its sides are looked for: found in the window around it,
+    # enlarged as the far search found it.
+    shift = np.array([[1.0, 0.0, 9.0], [0.0, 1.0, -7.0], [0.0, 0.0, 1.0]])
+    moved = dataclasses.replace(first, homography=shift @ first.homography)
+    again = process_frame(frame, reference, CAM, prior=moved, **hints)
     assert again.found_by == "track"
     np.testing.assert_allclose(again.corners_px, first.corners_px, atol=0.5)
 
