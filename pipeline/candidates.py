@@ -39,6 +39,12 @@ CONFIDENT_SUPPORT = 0.9  # a fit this good is not tried from another start
 # shared real photos and the bench's floors).
 MIN_EVIDENCE = 1.45
 MIN_FRAMED_EVIDENCE = 1.2  # enough with the rest of the pad found around the H (find._check)
+# Evidence an H loses per spread of stroke weight it differs by from the reference's
+# (``pipeline.hfit.h_deformation``): real pads against their pictures differ by up to
+# 1.5 spreads with evidence 1.56 and up; serifed letters I on their side, fitted as H's
+# of light strokes, came to 1.47-1.50 at 0.65-1 spreads (the shared photos; the bench's
+# real-world floors).
+UNLIKE_COST = 0.1
 MIN_BLOB_SEPARATION = 3.0  # the region against the band around it, in pooled std devs
 FINE_TRACE_BELOW_PX = 4000.0  # H's smaller than this are traced on a finer grid
 FINE_FACTOR = 4
@@ -67,11 +73,14 @@ class Located:
     corners: np.ndarray  # (12, 2) pixels
     fit: HomographyFit
     start: str  # "css" (the seed's corners) or "shape" (the affine shape match)
+    unlike: float = 0.0  # how far its strokes differ from the reference's, in spreads
 
     @property
     def evidence(self) -> float:
-        """Edge support plus shape overlap (0..2)."""
-        return self.fit.support + self.candidate.iou
+        """Edge support plus shape overlap (0..2), less what drawing the H's strokes
+        other than the reference's cost: an H unlike its picture is weaker evidence
+        of the pad (a serifed letter I on its side is an H of thin strokes)."""
+        return self.fit.support + self.candidate.iou - UNLIKE_COST * self.unlike
 
 
 def candidates(
@@ -101,8 +110,8 @@ def locate_all(found: list[Region], binary: Binarized, reference: Reference) -> 
 
 def locate(cand: Candidate, binary: Binarized, reference: Reference) -> Located | None:
     """Fit the H's sides from the candidate's shape match, then if that does not
-    find them well, from its CSS corners (the seed's reading); the fit that
-    finds more of the H's edges wins.
+    find them well, from its CSS corners (the seed's reading); the fit with the
+    most evidence wins.
 
     The affine start of the shape match needs no corners at all: it holds for
     thin strokes, serifs and blur that leave CSS a skewed reading (which may
@@ -121,16 +130,49 @@ def locate(cand: Candidate, binary: Binarized, reference: Reference) -> Located 
             if H0 is None:
                 continue
             search = 2.5
-        fit = fit_homography(binary.levels, reference.h_edges, H0, search_px=search)
-        if fit is None or fit.support < MIN_H_SUPPORT:
+        fitted = fit_h_sides(binary.levels, reference, H0, search_px=search)
+        if fitted is None:
             continue
-        corners = apply_h(fit.H, reference.corners_m)
+        fit, unlike = fitted
+        deform = reference.h_deformation
+        corners = apply_h(fit.H, deform.corners(reference.corners_m, fit.shape))
         if float(np.ptp(corners, axis=0).max()) < MIN_H_SPAN_PX:
             continue
-        if best is None or (fit.support, -fit.rms_px) > (best.fit.support, -best.fit.rms_px):
-            best = Located(cand, corners, fit, name)
-        if best is not None and best.fit.support >= CONFIDENT_SUPPORT:
+        located = Located(cand, corners, fit, name, unlike)
+        if best is None or (located.evidence, -fit.rms_px) > (best.evidence, -best.fit.rms_px):
+            best = located
+        if best.fit.support >= CONFIDENT_SUPPORT:
             break  # the H's edges were found: no need for another start
+    return best
+
+
+def fit_h_sides(
+    levels: np.ndarray,
+    reference: Reference,
+    H0: np.ndarray,
+    *,
+    search_px: float,
+    enough: float = CONFIDENT_SUPPORT,
+) -> tuple[HomographyFit, float] | None:
+    """The H's sides fitted to the edges from ``H0``: as the reference draws them,
+    and when that finds fewer than ``enough`` of them, with its strokes' weight free
+    too (a pad is rarely drawn exactly as its picture); the fit with the more evidence
+    (see `Located.evidence`), with how far its strokes differ from the reference's
+    (in spreads), or None when neither finds ``MIN_H_SUPPORT`` of the sides."""
+    deform = reference.h_deformation
+    best: tuple[HomographyFit, float] | None = None
+    for how in (None, deform):
+        fit = fit_homography(levels, reference.h_edges, H0, search_px=search_px, deform=how)
+        if fit is None or fit.support < MIN_H_SUPPORT:
+            continue
+        unlike = float(np.abs(fit.shape / deform.sigma).max()) if len(fit.shape) else 0.0
+        if (
+            best is None
+            or fit.support - UNLIKE_COST * unlike > best[0].support - UNLIKE_COST * best[1]
+        ):
+            best = (fit, unlike)
+        if best[0].support >= enough or not len(deform.sigma):
+            break
     return best
 
 

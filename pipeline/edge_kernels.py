@@ -191,6 +191,17 @@ def _solve(A, b):
 
 
 @compiled
+def _side_medians(r, side, s):
+    """For each residual, the median of its side's residuals."""
+    out = np.empty(len(r))
+    for j in range(s):
+        mine = np.nonzero(side == j)[0]
+        if len(mine):
+            out[mine] = np.median(r[mine])
+    return out
+
+
+@compiled
 def _mad(x):
     return 1.4826 * np.median(np.abs(x - np.median(x)))
 
@@ -204,8 +215,11 @@ def homography_steps(
     polygon,
     clearance_m,
     curved,
-    pts_m,
     pts_side,
+    pts_t,
+    deform_a,
+    deform_b,
+    deform_sigma,
     Tm,
     Tp,
     h0,
@@ -219,30 +233,36 @@ def homography_steps(
 ):
     """The Gauss-Newton steps of ``pipeline.homography_fit.fit_homography`` on the
     normalised homography ``h0`` (8 entries, pad coordinates through ``Tm``, pixels
-    through ``Tp``). Returns, after the step that found the most of the sides' edges,
-    (h, rms of the inliers, per side the share of its seen samples on an edge (nan:
-    none seen)), and whether a step was taken at all."""
+    through ``Tp``) and, with it, K deformations of the model: side j's ends move by
+    ``deform_a[j] @ p`` and ``deform_b[j] @ p`` (S x 2 x K, metres per unit of p), each
+    p_k held near 0 by ``deform_sigma[k]`` (K = 0: none). The samples lie at ``pts_t``
+    along their sides (``pts_side``). Returns, after the step that found the most of
+    the sides' edges, (h, p, rms of the inliers, per side the share of its seen
+    samples on an edge (nan: none seen)), and whether a step was taken at all."""
     s = a_m.shape[0]
-    n = pts_m.shape[0]
+    n = pts_side.shape[0]
+    kd = deform_sigma.shape[0]
+    npar = 8 + kd
     ih, iw = img.shape
+    sm = Tm[0, 0]  # Tm scales pad metres by sm and shifts them
     sp = Tp[0, 0]  # Tp scales pixels by sp and shifts them
     Tp_inv = np.array(
         [[1.0 / sp, 0.0, -Tp[0, 2] / sp], [0.0, 1.0 / sp, -Tp[1, 2] / sp], [0.0, 0.0, 1.0]]
     )
-    # The samples in normalised pad coordinates (fixed through the fit).
-    xn = np.empty((n, 2))
-    for i in range(n):
-        xn[i, 0], xn[i, 1] = _apply(Tm, pts_m[i, 0], pts_m[i, 1])
     h = h0.copy()
+    p = np.zeros(kd)
     Hn = np.empty((3, 3))
     found = np.full(s, np.nan)
     # The step after which most of the sides' edges are found: on a small H, whose
     # stroke ends have a few samples each, later steps may wander along a flat
     # valley and lose a few of them.
-    best_h, best_rms, best_found, best_support = h0.copy(), -1.0, found.copy(), -1.0
+    best_h, best_p, best_rms, best_found = h0.copy(), p.copy(), -1.0, found.copy()
+    best_support = -1.0
+    a = np.empty((s, 2))
+    b = np.empty((s, 2))
     proj = np.empty((n, 2))
     normal = np.empty((n, 2))
-    J_all = np.empty((n, 8))
+    J_all = np.empty((n, npar))
     use = np.empty(n, np.bool_)
     for it in range(iterations):
         for k in range(8):
@@ -250,8 +270,12 @@ def homography_steps(
         Hn[2, 2] = 1.0
         H = _matmul3(_matmul3(Tp_inv, Hn), Tm)
         search = max(1.5, search_px / 2.0**it)
+        for j in range(s):
+            for c in range(2):
+                a[j, c] = a_m[j, c] + _dot(deform_a[j, c], p)
+                b[j, c] = b_m[j, c] + _dot(deform_b[j, c], p)
         side_n, measured = _side_normals(
-            a_m, b_m, bright, polygon, clearance_m, curved, H, min_clearance_px, min_side_px
+            a, b, bright, polygon, clearance_m, curved, H, min_clearance_px, min_side_px
         )
         m = 0
         for i in range(n):
@@ -260,7 +284,8 @@ def homography_steps(
             if not use[i]:
                 continue
             m += 1
-            X, Y = xn[i, 0], xn[i, 1]
+            t = pts_t[i]
+            X, Y = _apply(Tm, a[j, 0] + t * (b[j, 0] - a[j, 0]), a[j, 1] + t * (b[j, 1] - a[j, 1]))
             wd = h[6] * X + h[7] * Y + 1.0
             u = (h[0] * X + h[1] * Y + h[2]) / wd
             v = (h[3] * X + h[4] * Y + h[5]) / wd
@@ -277,44 +302,61 @@ def homography_steps(
             J_all[i, 5] = ny / wd / sp
             J_all[i, 6] = -(nx * u + ny * v) * X / wd / sp
             J_all[i, 7] = -(nx * u + ny * v) * Y / wd / sp
+            # ... and by the deformations, through where the sample lies on the pad.
+            gx = (nx * (h[0] - u * h[6]) + ny * (h[3] - v * h[6])) / wd * sm / sp
+            gy = (nx * (h[1] - u * h[7]) + ny * (h[4] - v * h[7])) / wd * sm / sp
+            for k in range(kd):
+                dx = (1.0 - t) * deform_a[j, 0, k] + t * deform_b[j, 0, k]
+                dy = (1.0 - t) * deform_a[j, 1, k] + t * deform_b[j, 1, k]
+                J_all[i, 8 + k] = gx * dx + gy * dy
         if m == 0:
-            return h, -1.0, found, False
+            return best_h, best_p, -1.0, found, False
         idx = np.nonzero(use)[0]
         delta, ok = edge_offsets(img, proj[idx], normal[idx], search, min_drop)
         good = np.nonzero(ok)[0]
         if len(good) < 10:
-            return h, -1.0, found, False
+            return best_h, best_p, -1.0, found, False
         r = -delta[good]
-        med = np.median(r)
-        limit = max(0.5, 3.0 * _mad(r))
-        inl = good[np.abs(r - med) <= limit]
+        if kd:
+            # A side the model draws off by a stroke's change lies off as a whole:
+            # each side's residuals are judged around their own median.
+            r = r - _side_medians(r, pts_side[idx[good]], s)
+        inl = good[np.abs(r - np.median(r)) <= max(0.5, 3.0 * _mad(r))]
         if len(inl) < 10:
-            return h, -1.0, found, False
+            return best_h, best_p, -1.0, found, False
         per_side = np.zeros(s)
         if sides_alike:
             for q in inl:
                 per_side[pts_side[idx[q]]] += 1.0
-        A = np.zeros((8, 8))
-        g = np.zeros(8)
+        A = np.zeros((npar, npar))
+        g = np.zeros(npar)
+        total = 0.0
         for q in inl:
             ri = -delta[q]
             wi = 1.0 if abs(ri) <= 0.5 else 0.5 / max(abs(ri), 1e-9)
             if sides_alike:
                 wi /= per_side[pts_side[idx[q]]]
+            total += wi
             row = J_all[idx[q]]
-            for a in range(8):
-                g[a] -= wi * row[a] * ri
-                for b in range(a, 8):
-                    A[a, b] += wi * row[a] * row[b]
-        for a in range(8):
-            for b in range(a):
-                A[a, b] = A[b, a]
-        for a in range(8):
-            A[a, a] += damping * A[a, a] + 1e-12
+            for c in range(npar):
+                g[c] -= wi * row[c] * ri
+                for e in range(c, npar):
+                    A[c, e] += wi * row[c] * row[e]
+        for c in range(npar):
+            for e in range(c):
+                A[c, e] = A[e, c]
+        for c in range(8):
+            A[c, c] += damping * A[c, c] + 1e-12
+        # The deformations held near none: a side's worth of weight per sigma.
+        per = total / s
+        for k in range(kd):
+            A[8 + k, 8 + k] += per / deform_sigma[k] ** 2 + 1e-12
+            g[8 + k] -= per * p[k] / deform_sigma[k] ** 2
         step, solved = _solve(A, g)
         if not solved:
-            return h, -1.0, found, False
-        h = h + step
+            return best_h, best_p, -1.0, found, False
+        h = h + step[:8]
+        p = p + step[8:]
         acc = 0.0
         for q in inl:
             e = -delta[q] + _dot(J_all[idx[q]], step)
@@ -340,10 +382,11 @@ def homography_steps(
                 sides += 1
         support = total / sides if sides else 0.0
         if support >= best_support:
-            best_h, best_rms, best_found, best_support = h.copy(), fitted, found.copy(), support
-        if it > 0 and np.max(np.abs(step)) < 0.05 * sp:  # under ~0.05 px anywhere
+            best_h, best_p, best_rms, best_found = h.copy(), p.copy(), fitted, found.copy()
+            best_support = support
+        if it > 0 and np.max(np.abs(step[:8])) < 0.05 * sp:  # under ~0.05 px anywhere
             break
-    return best_h, best_rms, best_found, best_rms >= 0.0
+    return best_h, best_p, best_rms, best_found, best_rms >= 0.0
 
 
 @compiled

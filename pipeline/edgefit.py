@@ -43,8 +43,8 @@ class EdgeModel:
     curved: np.ndarray  # (S,) the side is a piece of a curve, not a straight edge
 
     @cached_property
-    def samples(self) -> tuple[np.ndarray, np.ndarray]:
-        """Points along the sides (pad metres) and the side each lies on.
+    def sampling(self) -> tuple[np.ndarray, np.ndarray]:
+        """The side each sample lies on, and where along it (0 at its start, 1 at its end).
 
         About ``MODEL_SAMPLES`` in all, spread by length: at least 3 on a
         straight side (its ends left out: the neighbouring side's edge
@@ -65,7 +65,13 @@ class EdgeModel:
         f = np.minimum(END_MARGIN, END_MARGIN_OF_EXTENT * extent / np.maximum(length, 1e-12))
         f = f[side]
         t = np.where(self.curved[side], (k + 0.5) / n, f + (1 - 2 * f) * k / np.maximum(n - 1, 1))
-        return self.a_m[side] + t[:, None] * d[side], side
+        return side, t
+
+    @cached_property
+    def samples(self) -> tuple[np.ndarray, np.ndarray]:
+        """Points along the sides (pad metres, see `sampling`) and the side each lies on."""
+        side, t = self.sampling
+        return self.a_m[side] + t[:, None] * (self.b_m - self.a_m)[side], side
 
     @classmethod
     def from_polygons(cls, polygons: list[tuple[np.ndarray, bool]]) -> EdgeModel:

@@ -21,8 +21,9 @@ import cv2
 import numpy as np
 
 from pipeline.camera import Camera
+from pipeline.candidates import fit_h_sides
 from pipeline.find import CandidateVerifier, Stages, Tally, search
-from pipeline.homography_fit import apply_h, fit_homography
+from pipeline.homography_fit import apply_h
 from pipeline.measure import MEASURE_SPAN_PX, Measured, measure, pad_box_m
 from pipeline.moments import shape_moments
 from pipeline.pose import pick_by_yaw, to_pose
@@ -189,7 +190,9 @@ def _detected(
 ) -> FrameResult:
     """The result for a measured pad whose H's outline on the frame is ``contour``."""
     fit = measured.fit
-    found_pose = to_pose(fit.rvec, fit.tvec, fit.rms_px, reference.symmetric, measured.ambiguous)
+    # A pad whose heading this frame did not tell is reported as a symmetric one's.
+    symmetric = reference.symmetric or not measured.heading_told
+    found_pose = to_pose(fit.rvec, fit.tvec, fit.rms_px, symmetric, measured.ambiguous)
     pose = pick_by_yaw(found_pose, yaw_hint)
     # The corners as found on the frame (they do not depend on the camera
     # model), numbered for the reported pose: corner i is where reference
@@ -256,9 +259,10 @@ def _fit_near(
     dark = projection.is_gray and projection.polarity == "dark"
     binary = binarize_channel(to_channel(view.image(image), projection), method, dark=dark)
     start = view.matrix @ H
-    fit = fit_homography(binary.levels, reference.h_edges, start, search_px=FOLLOW_REACH_PX)
-    if fit is None or fit.support < FOLLOW_SUPPORT:
+    fitted = fit_h_sides(binary.levels, reference, start, search_px=FOLLOW_REACH_PX)
+    if fitted is None or fitted[0].support < FOLLOW_SUPPORT:
         return None
+    fit = fitted[0]
     size = float(np.ptp(apply_h(fit.H, reference.corners_m), axis=0).max())
     size_was = float(np.ptp(apply_h(start, reference.corners_m), axis=0).max())
     if not 1 / MAX_FOLLOW_GROWTH <= size / max(size_was, 1e-9) <= MAX_FOLLOW_GROWTH:

@@ -18,6 +18,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from pipeline.homography_fit import Deformation
+
 LEG_FILL = 0.6  # a column belongs to a leg when the region fills this much of its height
 MIN_IOU = 0.7  # block H against the region: serif H's ~0.85, block H's > 0.95
 _PAD = 2  # canvas margin, pixels
@@ -221,3 +223,59 @@ def _h_cover(shape: tuple[int, ...], h) -> np.ndarray:
         cy = np.clip(np.minimum(ys + 1, ry1) - np.maximum(ys, ry0), 0, 1)
         out += np.outer(cy, cx)
     return np.minimum(out, 1.0)
+
+
+H_STROKE_SPREAD = 0.3  # how much the H in view may differ, of each stroke's width
+
+
+def h_deformation(corners_m: np.ndarray) -> Deformation | None:
+    """How the H in view may differ from the reference's, for `fit_homography`: its
+    strokes bolder or lighter (one parameter, metres: each stroke's width grows by
+    it, the legs inward from their outer edges, the crossbar on both of its edges,
+    held within about ``H_STROKE_SPREAD`` of the strokes' mean width). A picture of
+    a pad is rarely exact: printing, fabric, a synthetic drawing or a rectified
+    photo change the strokes' weight by a few percent of the H, its outer box much
+    less. All strokes alike, as a bolder lettering draws them: legs narrowing while
+    the crossbar thickens would turn an H into a letter I on its side, and one leg
+    narrowing against the other is the view's perspective, the homography's. None
+    when the 12 corners are not an H's (its four concave corners are the
+    crossbar's, in two adjacent pairs six apart).
+
+    >>> from pipeline.render import PadGeometry
+    >>> d = h_deformation(PadGeometry().h_corners_m)
+    >>> d.a.shape, round(float(d.sigma[0]), 4)
+    ((12, 2, 1), 0.0187)
+    """
+    c = np.asarray(corners_m, np.float64).reshape(-1, 2)
+    if len(c) != 12:
+        return None
+    prev, nxt = np.roll(c, 1, axis=0), np.roll(c, -1, axis=0)
+    u, v = c - prev, nxt - c
+    turn = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+    area = float(np.sum(c[:, 0] * nxt[:, 1] - c[:, 1] * nxt[:, 0]))
+    concave = set(np.nonzero(turn * area < 0)[0].tolist())
+    for r in range(12):
+        if concave == {(r + k) % 12 for k in (2, 3, 8, 9)}:
+            break
+    else:
+        return None
+    i = [(r + k) % 12 for k in range(12)]  # i[k]: the corner in position k of the H
+
+    def unit(v: np.ndarray) -> np.ndarray:
+        return v / max(float(np.hypot(*v)), 1e-12)
+
+    def length(a: int, b: int) -> float:
+        return float(np.hypot(*(c[i[a]] - c[i[b]])))
+
+    up = unit(c[i[0]] - c[i[11]])  # along the legs
+    basis = np.zeros((12, 2, 1))
+    left, right = unit(c[i[1]] - c[i[0]]), unit(c[i[4]] - c[i[5]])  # across the legs, inward
+    for k, move in (
+        (1, left), (10, left), (4, right), (7, right),  # the legs' ends' inner corners
+        (2, left + 0.5 * up), (9, left - 0.5 * up),  # the crossbar's corners on the left
+        (3, right + 0.5 * up), (8, right - 0.5 * up),  # and on the right
+    ):  # fmt: skip
+        basis[i[k], :, 0] = move
+    strokes = (length(1, 0), length(5, 4), 0.5 * (length(2, 9) + length(3, 8)))
+    sigma = H_STROKE_SPREAD * np.array([float(np.mean(strokes))])
+    return Deformation(basis, np.roll(basis, -1, axis=0), sigma)

@@ -12,7 +12,7 @@ still pins the H's height.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -31,12 +31,37 @@ class HomographyFit:
     distance of the inlier edge points to the model's sides. ``support``: per
     visible side, the share of its samples with an edge of the right polarity
     within 0.75 px of where ``H`` puts it, averaged over the sides;
-    ``side_found``: those shares, per side of the model (nan for sides not seen)."""
+    ``side_found``: those shares, per side of the model (nan for sides not seen).
+    ``shape``: the fitted deformation (see `Deformation`; empty without one)."""
 
     H: np.ndarray
     rms_px: float
     support: float
     side_found: np.ndarray  # per model side: share of its samples on an edge (nan: not seen)
+    shape: np.ndarray = field(default_factory=lambda: np.zeros(0))  # the deformation's p
+
+
+@dataclass(frozen=True, eq=False)
+class Deformation:
+    """Ways a model's picture may differ from the thing in view, fitted with the
+    homography: with parameters p (K numbers, metres), side j's start moves by
+    ``a[j] @ p`` and its end by ``b[j] @ p`` in the pad plane; each p_k is held near 0
+    with a spread of ``sigma[k]``."""
+
+    a: np.ndarray  # (S, 2, K)
+    b: np.ndarray  # (S, 2, K)
+    sigma: np.ndarray  # (K,)
+
+    @classmethod
+    def none(cls, sides: int) -> Deformation:
+        empty = np.zeros((sides, 2, 0))
+        return cls(empty, empty, np.zeros(0))
+
+    def corners(self, corners_m: np.ndarray, shape: np.ndarray) -> np.ndarray:
+        """A closed polygon's corners (its sides' starts) moved by the fitted ``shape``."""
+        if not len(shape):
+            return corners_m
+        return corners_m + self.a @ shape
 
 
 def apply_h(H: np.ndarray, pts: np.ndarray) -> np.ndarray:
@@ -55,6 +80,7 @@ def fit_homography(
     iterations: int = 6,
     search_px: float = 2.5,
     sides_alike: bool = True,
+    deform: Deformation | None = None,
 ) -> HomographyFit | None:
     """Refine ``H0`` so that the model's sides lie on the edges of ``image``.
 
@@ -68,6 +94,8 @@ def fit_homography(
         each later step looks half as far, down to 1.5 px.
     sides_alike : weigh every side alike however many samples it has (for
         the H alone, whose stroke ends pin its height), or every sample alike.
+    deform : ways the model may differ from what is in view (the H's strokes
+        wider or narrower than the reference's), fitted with the homography.
 
     Returns
     -------
@@ -104,8 +132,9 @@ def fit_homography(
     Tp = np.array([[sp, 0, -sp * cp[0]], [0, sp, -sp * cp[1]], [0, 0, 1]])
     Hn = Tp @ H @ np.linalg.inv(Tm)
     h0 = (Hn / Hn[2, 2]).ravel()[:8].copy()
-    pts_m, side = model.samples
-    h, fitted, found, ok = homography_steps(
+    side, t = model.sampling
+    deform = deform or Deformation.none(len(model.a_m))
+    h, shape, fitted, found, ok = homography_steps(
         img,
         model.a_m,
         model.b_m,
@@ -113,8 +142,11 @@ def fit_homography(
         model.polygon,
         model.clearance_m,
         model.curved,
-        pts_m,
         side,
+        t,
+        deform.a,
+        deform.b,
+        deform.sigma,
         Tm,
         Tp,
         h0,
@@ -131,7 +163,8 @@ def fit_homography(
     H = np.linalg.inv(Tp) @ np.append(h, 1.0).reshape(3, 3) @ Tm
     H = H / H[2, 2]
     seen = np.isfinite(found)
-    return HomographyFit(H, fitted, float(found[seen].mean()) if seen.any() else 0.0, found)
+    share = float(found[seen].mean()) if seen.any() else 0.0
+    return HomographyFit(H, fitted, share, found, shape)
 
 
 def support(

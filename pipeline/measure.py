@@ -40,6 +40,7 @@ WIDE_SEARCH_PX = 6.0  # how far the whole pad's edges are first looked for
 SELF_SUFFICIENT_PX = 100.0  # an H this large pins the pose by itself
 MIN_MARKS_FOUND = 0.5  # of the marks' resolvable sides, for the whole pad to count
 MARK_SIDE_PX = 4.0  # a mark's straight side shorter than this (a star's point) is not told
+HEADING_MARGIN = 0.05  # of the marks' edges: one half turn must find this many more
 _HALF_TURN = np.diag([-1.0, -1.0, 1.0])  # pad metres turned about the centre
 
 
@@ -47,12 +48,14 @@ _HALF_TURN = np.diag([-1.0, -1.0, 1.0])  # pad metres turned about the centre
 class Measured:
     """``H``: pad metres -> frame pixels; ``fit``: the pose (OpenCV pad -> camera);
     ``support``: the share of the whole pad's edges found where the pose puts
-    them; ``ambiguous``: another pose fits as well (see `_fit_pose`)."""
+    them; ``ambiguous``: another pose fits as well (see `_fit_pose`);
+    ``heading_told``: the pad's marks told its heading (see `_heading`)."""
 
     H: np.ndarray
     fit: EdgeFit
     support: float
     ambiguous: bool
+    heading_told: bool = False
 
 
 def measure(
@@ -88,12 +91,12 @@ def measure(
     # With the pad's other marks found, or a lens whose distortion the
     # homography cannot follow, the pose is refined on the edges.
     polish = whole is not Hv or cam.has_distortion
-    Hv = _heading(whole, reference, levels)
+    Hv, told = _heading(whole, reference, levels)
     fitted = _fit_pose(reference, levels, cam, Hv, polish=polish, gravity=gravity)
     if fitted is None:
         return None
     fit, support, ambiguous = fitted
-    return Measured(np.linalg.inv(view.matrix) @ Hv, fit, support, ambiguous)
+    return Measured(np.linalg.inv(view.matrix) @ Hv, fit, support, ambiguous, told)
 
 
 def pad_box_m(reference: Reference) -> np.ndarray:
@@ -153,18 +156,24 @@ def _marks_found(fit: HomographyFit, reference: Reference) -> float:
     return float(found.mean()) if len(found) else 0.0
 
 
-def _heading(H: np.ndarray, reference: Reference, levels: np.ndarray) -> np.ndarray:
-    """The homography (pad metres -> pixels) for the pad's heading.
+def _heading(H: np.ndarray, reference: Reference, levels: np.ndarray) -> tuple[np.ndarray, bool]:
+    """The homography (pad metres -> pixels) for the pad's heading, and whether the
+    frame told it.
 
     The H alone looks the same after a half turn; on a pad whose other marks
     do not (a triangle, stars above the H), the turn under which more of the
-    marks' edges are found is the pad's.
+    marks' edges are found is the pad's. When both turns find about as few of
+    them (``HEADING_MARGIN``: the marks blurred or too small to see), the frame
+    does not tell the heading: the pose is then reported as a symmetric pad's,
+    for the caller's heading to decide.
     """
     model = reference.marks_model
     if reference.symmetric or model is None:
-        return H
+        return H, False
     turned = H @ _HALF_TURN
-    return turned if edge_share(levels, model, turned) > edge_share(levels, model, H) else H
+    share, turned_share = edge_share(levels, model, H), edge_share(levels, model, turned)
+    told = abs(turned_share - share) >= HEADING_MARGIN
+    return (turned if turned_share > share else H), told
 
 
 def _fit_pose(

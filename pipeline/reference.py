@@ -14,7 +14,8 @@ from pipeline.camera import Camera
 from pipeline.colour import Projection, contrast, learn_projection
 from pipeline.edgefit import EdgeModel
 from pipeline.edges import refine_polygon
-from pipeline.hfit import HFit, fit_h
+from pipeline.hfit import HFit, fit_h, h_deformation
+from pipeline.homography_fit import Deformation
 from pipeline.marks import Mark, find_marks, symmetric_marks
 from pipeline.moments import shape_moments
 from pipeline.preprocess import check_image
@@ -104,6 +105,12 @@ class Reference:
     def h_edges(self) -> EdgeModel:
         """The H's own sides: what a frame must show for a detection."""
         return EdgeModel.from_polygons([(self.corners_m, True)])
+
+    @cached_property
+    def h_deformation(self) -> Deformation:
+        """How the H in view may differ from this picture's (its strokes' widths),
+        fitted with its homography (``pipeline.hfit.h_deformation``)."""
+        return h_deformation(self.corners_m) or Deformation.none(len(self.corners_m))
 
     @cached_property
     def shape(self) -> ShapeMatcher:

@@ -26,9 +26,10 @@ class Pose:
     ``position_m``: camera centre in the pad frame (origin at the pad centre, +x to
     the reference picture's right edge, +y to its top edge, +z up out of the pad).
     ``R_pad_cam``: rotation mapping camera-frame vectors (OpenCV: x right, y down,
-    z forward) into the pad frame. ``symmetric``: the pad looks the same after a
-    180 degree turn, so this pose and its turned twin fit equally well;
-    ``yaw_hint`` decides between them. ``ambiguous``: the pixels fit another
+    z forward) into the pad frame. ``symmetric``: this pose and its turned twin
+    fit the frame equally well (the pad looks the same after a 180 degree turn, or
+    the marks that tell its heading were not seen in this frame); ``yaw_hint``
+    decides between them. ``ambiguous``: the pixels fit another
     pose, tilted the other way, as well as this one (a small pad seen nearly
     head on, with no ``gravity_hint`` to tell them apart).
     """

@@ -101,6 +101,7 @@ def run(
     out["reference_error"] = ref_error
     if not d.symmetric:
         out["twin_rate"] = ours[main].twins / max(ours[main].detected, 1)
+        out["heading_untold_rate"] = ours[main].untold / max(ours[main].detected, 1)
     out["degrade"] = degrade
     out["attitude_hint_deg"] = NOISE_DEG if hint else None
     return out

@@ -20,6 +20,7 @@ class Tally:
         self.fp_frames = 0
         self.fp = 0
         self.twins = 0
+        self.untold = 0
         self.pos_pct: list[float] = []
         self.rot_deg: list[float] = []
         self.ms: list[float] = []
@@ -31,10 +32,13 @@ class Tally:
             self.stages.setdefault(k, []).append(v)
 
     def score(self, detected: bool, pose: Pose | None, view: View, symmetric: bool) -> None:
-        """One frame with the pad in view; a symmetric pad's turned twin counts as right.
+        """One frame with the pad in view; a symmetric pad's turned twin counts as right,
+        and so does that of a pose that says its heading was not told (``pose.symmetric``:
+        the caller's heading decides, and the bench gives none).
 
         For a pad that is not symmetric, a pose nearer the turned twin than the truth is
-        counted in ``twin_rate`` (and scored against the truth, i.e. as wrong).
+        counted in ``twin_rate`` (and scored against the truth, i.e. as wrong); a pose
+        of it that did not tell its heading, in ``heading_untold_rate``.
         """
         self.n += 1
         if not detected or pose is None:
@@ -42,7 +46,9 @@ class Tally:
         self.detected += 1
         pos, rot = pose_errors(pose, view.position_m, view.R_pad_cam)
         tpos, trot = pose_errors(pose, TURN @ view.position_m, TURN @ view.R_pad_cam)
-        if symmetric:
+        if not symmetric and pose.symmetric:
+            self.untold += 1
+        if symmetric or pose.symmetric:
             pos, rot = min(pos, tpos), min(rot, trot)
         elif trot < rot:
             self.twins += 1

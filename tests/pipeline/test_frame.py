@@ -8,6 +8,7 @@ import pytest
 from pipeline import Camera, Reference, process_frame
 from pipeline.pose import TURN
 from pipeline.render import (
+    DESIGNS,
     camera_rotation,
     make_pad_image,
     make_scene,
@@ -249,3 +250,24 @@ def test_an_h_without_the_dark_board_around_it_is_not_the_pad(reference):
     res = process_frame(frame, reference, CAM)
     assert not res.detected
     assert "board around them" in res.reason
+
+
+def test_a_pad_whose_heading_marks_are_not_seen_is_reported_as_symmetric():
+    # The shared photos' pad: its triangle above the H tells its heading.
+    design = DESIGNS["paper_ring"]
+    picture = design.draw(800).image
+    reference = Reference.from_image(picture, design.size_m)
+    assert not reference.symmetric
+    # The same pad with its triangle hidden (taped over, say).
+    hidden = picture.copy()
+    hidden[150:235, 550:645] = picture[300, 200]
+    R = camera_rotation(30.0, tilt_deg=3.0, tilt_dir_deg=100.0)
+    p = np.array([0.02, -0.03, 0.9])
+    for pad, told in ((picture, True), (hidden, False)):
+        scene = make_scene(pad, design.size_m, rng=np.random.default_rng(3), floor="plain")
+        frame = render(scene, CAM, p, R, snr_db=30.0, rng=np.random.default_rng(4))
+        res = process_frame(frame, reference, CAM, yaw_hint=30.0)
+        assert res.detected and res.pose.symmetric is not told
+        # told by its marks, or picked by the caller's heading: the right one either way
+        pos_err, rot_err = _errors(res.pose, p, R, symmetric=False)
+        assert pos_err < 2.0 and rot_err < 2.0
