@@ -33,6 +33,7 @@ from pipeline.preprocess import (
     Binarized,
     binarize_channel,
     check_image,
+    smooth_channel,
     to_channel,
 )
 from pipeline.reference import SEARCH_WIDTH_PX, Reference
@@ -122,16 +123,7 @@ def process_frame(
     tally = Tally()
     search_view = View.whole(image.shape, SEARCH_WIDTH_PX)
     mask = None
-    # Where to look and how: around the last detection, then the whole frame,
-    # then the whole frame again with the threshold that holds across shadows.
-    tries = [("track", _tracking_view(prior, reference, image.shape), method)]
-    tries.append(("search", search_view, method))
-    if method == DEFAULT_METHOD:
-        tries.append(("search", search_view, FALLBACK_METHOD))
-    # A far pad: too small at the search's width, searched at the camera's own
-    # resolution before giving up (native frames buy range), and a small frame
-    # enlarged: a leg of 2-3 px keeps its shape and corners when interpolated.
-    tries.append(("search", View.enlarged(image.shape, FAR_SEARCH_WIDTH_PX), method))
+    # First the H where it was a moment ago, followed.
     followed = _follow(prior, image, reference, method)
     if followed is not None:
         view, binary, H = followed
@@ -144,6 +136,16 @@ def process_frame(
             return _detected(
                 measured, reference, outline, yaw_hint, "follow", mask, stages, t_start
             )
+    # Then searched for: around the last detection, then the whole frame, then the
+    # whole frame again with the threshold that holds across shadows.
+    tries = [("track", _tracking_view(prior, reference, image.shape), method)]
+    tries.append(("search", search_view, method))
+    if method == DEFAULT_METHOD:
+        tries.append(("search", search_view, FALLBACK_METHOD))
+    # A far pad: too small at the search's width, searched at the camera's own
+    # resolution before giving up (native frames buy range), and a small frame
+    # enlarged: a leg of 2-3 px keeps its shape and corners when interpolated.
+    tries.append(("search", View.enlarged(image.shape, FAR_SEARCH_WIDTH_PX), method))
     for way, view, how in tries:
         if view is None:
             continue
@@ -235,31 +237,40 @@ def _follow(
     if not math.isfinite(span) or span < 1.0:
         return None
     if span > 1.5 * FOLLOW_COARSE_SPAN_PX:
-        coarse = _fit_near(image, reference, H, FOLLOW_COARSE_SPAN_PX / span, method)
+        coarse = _window(image, H, reference, FOLLOW_COARSE_SPAN_PX / span)
         if coarse is None:
             return None
-        H = coarse[2]
-    return _fit_near(image, reference, H, MEASURE_SPAN_PX / span, method)
-
-
-def _fit_near(
-    image: np.ndarray, reference: Reference, H: np.ndarray, scale: float, method: str
-) -> tuple[View, Binarized, np.ndarray] | None:
-    """The H's sides fitted within ``FOLLOW_REACH_PX`` (at ``scale``, at most 1) of
-    where ``H`` (pad metres -> frame pixels) puts them: the window, its binarized
-    channel and the fitted homography, or None when they are not found again."""
-    was = apply_h(H, pad_box_m(reference))
-    span = float(np.ptp(was, axis=0).max())
-    box = np.concatenate([was.min(axis=0), was.max(axis=0)])
-    grow = 0.1 * span + FOLLOW_REACH_PX / min(scale, 1.0)
-    view = View.around(box, image.shape, grow, scale)
+        levels = smooth_channel(coarse.image(image), reference.projection).astype(np.float32)
+        H = _fit_near(levels, coarse, reference, H)
+        if H is None:
+            return None
+    view = _window(image, H, reference, MEASURE_SPAN_PX / span)
     if view is None:
         return None
     projection = reference.projection
     dark = projection.is_gray and projection.polarity == "dark"
     binary = binarize_channel(to_channel(view.image(image), projection), method, dark=dark)
+    H = _fit_near(binary.levels, view, reference, H)
+    return None if H is None else (view, binary, H)
+
+
+def _window(image: np.ndarray, H: np.ndarray, reference: Reference, scale: float) -> View | None:
+    """The view (at ``scale``, at most 1) of the pad ``H`` puts in the frame, with room
+    for its sides to be found ``FOLLOW_REACH_PX`` away."""
+    was = apply_h(H, pad_box_m(reference))
+    span = float(np.ptp(was, axis=0).max())
+    box = np.concatenate([was.min(axis=0), was.max(axis=0)])
+    return View.around(box, image.shape, 0.1 * span + FOLLOW_REACH_PX / min(scale, 1.0), scale)
+
+
+def _fit_near(
+    levels: np.ndarray, view: View, reference: Reference, H: np.ndarray
+) -> np.ndarray | None:
+    """The H's sides fitted on a view's smoothed channel within ``FOLLOW_REACH_PX`` of
+    where ``H`` (pad metres -> frame pixels) puts them: the fitted homography (frame
+    pixels), or None when they are not found again at the size they had."""
     start = view.matrix @ H
-    fitted = fit_h_sides(binary.levels, reference, start, search_px=FOLLOW_REACH_PX)
+    fitted = fit_h_sides(levels, reference, start, search_px=FOLLOW_REACH_PX)
     if fitted is None or fitted[0].support < FOLLOW_SUPPORT:
         return None
     fit = fitted[0]
@@ -267,7 +278,7 @@ def _fit_near(
     size_was = float(np.ptp(apply_h(start, reference.corners_m), axis=0).max())
     if not 1 / MAX_FOLLOW_GROWTH <= size / max(size_was, 1e-9) <= MAX_FOLLOW_GROWTH:
         return None
-    return view, binary, np.linalg.inv(view.matrix) @ fit.H
+    return np.linalg.inv(view.matrix) @ fit.H
 
 
 def _pad_span_px(H: np.ndarray, reference: Reference) -> float:
