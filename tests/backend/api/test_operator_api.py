@@ -91,7 +91,6 @@ def test_a_write_is_confirmed_by_the_vehicle_and_recorded(client):
 
 
 def test_precision_landing_set_up_writes_plnd_and_reboots(client):
-    latency = client.get("/api/status").json()["pipeline"]["latency_ms"]
     # a reboot shows as the vehicle's clock going back: older than the reboot takes
     wait_for(lambda: (client.get("/api/telemetry").json()["vehicle_time_boot_ms"] or 0) > 5000, 30)
     boots = client.get("/api/telemetry").json()["boots"]
@@ -102,6 +101,9 @@ def test_precision_landing_set_up_writes_plnd_and_reboots(client):
     written = {w["name"]: w["value"] for w in body["writes"]}
     assert written["PLND_ENABLED"] == 1 and written["PLND_TYPE"] == 1
     assert 0.02 <= body["lag_s"] <= 0.25 and written["PLND_LAG"] == body["lag_s"]
+    # from the capture-to-result latency measured when it was set up (it moves on a
+    # loaded machine: not one read before)
+    latency = body["latency_ms"]
     if latency is not None:
         assert body["lag_s"] == pytest.approx(min(0.25, max(0.02, (latency + 10) / 1000)), abs=0.02)
     assert "the autopilot is rebooting" in body["detail"]
