@@ -29,12 +29,12 @@ from pipeline.candidates import (
     locate,
 )
 from pipeline.homography_fit import apply_h
-from pipeline.measure import whole_pad
+from pipeline.measure import pad_box_m, whole_pad
 from pipeline.preprocess import Binarized, binarize_channel, to_channel
 from pipeline.reference import Reference
 from pipeline.shapes import Region, regions
 from pipeline.strokes import MAX_DIP, deepest_dip, stroke_samples
-from pipeline.template import compare
+from pipeline.template import compare, pad_pattern
 
 MIN_TEMPLATE_NCC = 0.4  # with the reference picture around the H
 BOARD_TOLERANCE = 0.2  # the board's brightness relative to the H's, against the reference's
@@ -42,6 +42,10 @@ BOARD_TOLERANCE = 0.2  # the board's brightness relative to the H's, against the
 # overexposed views came to NCC 0.97-0.99 and 0.23-0.35 off; look-alikes, to 0.95 at most.
 SURE_NCC, SURE_BOARD_TOLERANCE = 0.97, 0.4
 SMALL_H_PX = 14.0  # an H this small counts only with the rest of its pad found
+# ... by its edges, or by the whole pad's pattern (NCC): on the bench's far views
+# (10-20 m), true pads' came to 0.69-0.92 (most over 0.78), clear look-alikes' (an H's
+# evidence over MIN_EVIDENCE) to 0.72 at most.
+MIN_PAD_NCC = 0.78
 # Evidence (candidates.Located.evidence) at which an H needs no check that it stands out
 # from its board: on the bench, no look-alike or texture reaching it stood out less than
 # 5.5 (the check's bar: 3), while pads under a shadow's edge reached it standing out 1.5-2.8.
@@ -70,6 +74,8 @@ class Tally:
     broken: int = 0
     rejected: int = 0
     turned_down: list[np.ndarray] = field(default_factory=list)  # frame boxes x0 y0 x1 y1
+    # (evidence, frame box) of the small marks refused in a view that was not enlarged
+    small_refused: list[tuple[float, np.ndarray]] = field(default_factory=list)
 
     def reason(self) -> str:
         if not self.shapes:
@@ -102,6 +108,24 @@ class Tally:
 
     def turn_down(self, box: np.ndarray) -> None:
         self.turned_down.append(box)
+
+    def refused(self, box: np.ndarray, evidence: float, enlarged: float) -> None:
+        """A located mark refused: kept for a closer look when it was small and seen
+        at the frame's own resolution or coarser."""
+        if enlarged <= 1.0 and float(max(box[2] - box[0], box[3] - box[1])) < REJUDGE_BELOW_PX:
+            self.small_refused.append((evidence, box))
+
+    def closer_looks(self, count: int) -> list[np.ndarray]:
+        """The boxes of up to ``count`` distinct small refused marks, the likeliest H's
+        (best evidence) first."""
+        picked: list[np.ndarray] = []
+        for _, box in sorted(self.small_refused, key=lambda e: -e[0]):
+            if len(picked) == count:
+                break
+            reach = max(1.5, 0.25 * float(max(box[2] - box[0], box[3] - box[1])))
+            if all(float(np.abs(box - b).max()) > reach for b in picked):
+                picked.append(box)
+        return picked
 
 
 @dataclass
@@ -183,6 +207,7 @@ def _hits(
             setattr(tally, verdict, getattr(tally, verdict) + 1)
             if verdict != "unclear":  # (the region's own levels: another mask may differ)
                 tally.turn_down(box)
+            tally.refused(box, hit.evidence, enlarged)
             continue
         if verifier is not None:
             # Fitted corners: what the verifier sees does not depend on the threshold.
@@ -191,6 +216,7 @@ def _hits(
             if not accepted:
                 tally.rejected += 1
                 tally.turn_down(box)
+                tally.refused(box, hit.evidence, enlarged)
                 continue
         yield hit
     stages.lap("corners")
@@ -230,7 +256,7 @@ def _check(
         # (which a look-alike mark on the floor has not).
         if whole_pad(hit.fit.H, reference, binary.levels, any_size=True) is hit.fit.H:
             return "unclear"
-    elif span < SMALL_H_PX and whole_pad(hit.fit.H, reference, binary.levels) is hit.fit.H:
+    elif span < SMALL_H_PX and not _small_pad_around(hit, binary, reference):
         # A few pixels of H-shaped texture are everywhere: so small, the H is the
         # pad's only where the rest of the pad (its rim, bars, rings) is found too.
         return "unframed"
@@ -256,3 +282,20 @@ def _check(
     if deepest_dip(image, reference.projection.weights, samples) > MAX_DIP:
         return "broken"
     return ""
+
+
+def _small_pad_around(hit: Located, binary: Binarized, reference: Reference) -> bool:
+    """Whether the rest of the pad is found around a small H: its marks' edges, or
+    (the marks a pixel or two wide, their edges merged) the whole pad's pattern."""
+    if whole_pad(hit.fit.H, reference, binary.levels, any_size=True) is not hit.fit.H:
+        return True
+    if reference.marks_model is None:
+        return False
+    pattern = pad_pattern(
+        binary.smooth,
+        reference.template_pyramid,
+        reference.channel_px_per_m,
+        pad_box_m(reference),
+        hit.fit.H,
+    )
+    return pattern >= MIN_PAD_NCC

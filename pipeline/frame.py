@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Iterator
 
 import cv2
 import numpy as np
@@ -38,7 +39,7 @@ from pipeline.preprocess import (
 )
 from pipeline.reference import SEARCH_WIDTH_PX, Reference
 from pipeline.result import FrameResult
-from pipeline.view import View, enlargement
+from pipeline.view import MAX_ENLARGEMENT, View, enlargement
 
 FALLBACK_METHOD = "shadow"  # tried when the default threshold finds nothing
 TRACK_SPAN_PX = 100.0  # a tracked H is looked for at a scale where it spans about this
@@ -48,6 +49,7 @@ FOLLOW_REACH_PX = 6.0  # a followed H's sides are looked for this far from where
 FOLLOW_COARSE_SPAN_PX = 120.0  # a larger pad is first followed on a view where it spans this
 FOLLOW_SUPPORT = 0.9  # the share of the H's sides found again for a followed H to count
 MAX_FOLLOW_GROWTH = 1.25  # and its size may change by this factor between two frames
+MAX_CLOSER_LOOKS = 3  # small marks refused on a wide frame, looked at again enlarged
 
 __all__ = ["CandidateVerifier", "process_frame"]
 
@@ -146,7 +148,7 @@ def process_frame(
     # resolution before giving up (native frames buy range), and a small frame
     # enlarged: a leg of 2-3 px keeps its shape and corners when interpolated.
     tries.append(("search", View.enlarged(image.shape, FAR_SEARCH_WIDTH_PX), method))
-    for way, view, how in tries:
+    for way, view, how in _with_closer_looks(tries, tally, image.shape, reference):
         if view is None:
             continue
         to_frame = np.linalg.inv(view.matrix)
@@ -178,6 +180,30 @@ def process_frame(
             contour = apply_h(to_frame, hit.candidate.region.contour.astype(np.float64))
             return _detected(measured, reference, contour, yaw_hint, way, mask, stages, t_start)
     return _nothing(stages.timings, t_start, tally.reason(), mask)
+
+
+def _with_closer_looks(
+    tries: list[tuple[str, View | None, str]],
+    tally: Tally,
+    shape: tuple[int, ...],
+    reference: Reference,
+) -> Iterator[tuple[str, View | None, str]]:
+    """The tries, then on a frame too wide to be enlarged whole (a camera's native
+    1280 px and over) a window enlarged around each of the small marks they refused
+    (``MAX_CLOSER_LOOKS``): a far pad's H, a dozen pixels across with legs of 2 px,
+    keeps its shape and corners only interpolated; enlarging a whole 1280 x 720
+    frame would cost four times its pixels on every frame without the pad."""
+    yield from tries
+    if enlargement(shape, FAR_SEARCH_WIDTH_PX) >= MAX_ENLARGEMENT:
+        return  # (enlarged whole already)
+    # The pad around its H, with room for its board: the H's box grown by the pad's
+    # size over the H's.
+    pad_over_h = reference.pad_size_m / float(np.ptp(reference.corners_m, axis=0).max())
+    for box in tally.closer_looks(MAX_CLOSER_LOOKS):
+        size = float(max(box[2] - box[0], box[3] - box[1]))
+        grow = 0.5 * pad_over_h * size + 4.0
+        view = View.around(box, shape, grow, MAX_ENLARGEMENT, max_scale=MAX_ENLARGEMENT)
+        yield "search", view, DEFAULT_METHOD
 
 
 def _detected(

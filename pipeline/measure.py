@@ -35,6 +35,11 @@ MAX_TILT_OFF_DEG = 3.0  # a refined pose may lean this far from the attitude's l
 # level is not the pad lying flat (an H of other proportions seen at a slant, or a wrong
 # pose): the hint's error and a sloping pad stay well under it.
 MAX_LEAN_DEG = 12.0
+# The pad's points, placed by its homography, weighed against the attitude: within
+# POINT_SIGMA_PX on a pad over SMALL_PAD_SPAN_PX; on a smaller one the tilt they show
+# shrinks with the square of its span while its blurred edges still bias them (far
+# pads' tilts went 3-7 degrees off a hint 1 degree right).
+POINT_SIGMA_PX, SMALL_PAD_SPAN_PX = 0.3, 50.0
 AMBIGUOUS_FIT = 0.8  # two poses whose RMS errors are within this ratio are a tie
 WIDE_SEARCH_PX = 6.0  # how far the whole pad's edges are first looked for
 SELF_SUFFICIENT_PX = 100.0  # an H this large pins the pose by itself
@@ -225,7 +230,8 @@ def _fit_pose(
     ambiguous = False
     if gravity is not None:
         _, _, rvec, tvec = min(cands, key=lambda c: tilt_from_level_deg(c[2], gravity))
-        rvec, tvec = refine_with_gravity(pts_m, px, cam, rvec, tvec, gravity)
+        sigma_px = POINT_SIGMA_PX * max(1.0, (SMALL_PAD_SPAN_PX / _span(px)) ** 2)
+        rvec, tvec = refine_with_gravity(pts_m, px, cam, rvec, tvec, gravity, sigma_px=sigma_px)
         fit = EdgeFit(rvec, tvec, _rms(pts_m, px, cam, rvec, tvec), len(pts_m), 0)
     else:
         cands.sort(key=functools.cmp_to_key(lambda a, b: -1 if _better(a, b) else 1))
@@ -245,6 +251,10 @@ def _fit_pose(
     if gravity is not None and tilt_from_level_deg(fit.rvec, gravity) > MAX_LEAN_DEG:
         return None
     return fit, support, ambiguous
+
+
+def _span(px: np.ndarray) -> float:
+    return max(float(np.ptp(px, axis=0).max()), 1.0)
 
 
 def _rms(pts_m: np.ndarray, px: np.ndarray, cam: Camera, rvec, tvec) -> float:

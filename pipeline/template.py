@@ -6,6 +6,8 @@ the frame by the located homography, around the H, and compared in two ways:
 - pattern: normalised cross-correlation of the channels over the H and a
   margin around it, which ignores exposure and contrast. A shape that fits
   the H's outline but differs inside or right around it scores low.
+- whole pad: correlation of the channels over the pad's outline, for an H too
+  small to find the pad's other marks by their edges.
 - board: the colour of the board around the H, out to a good part of the H's
   size, against the reference's at the same places: its brightness relative
   to the H's (or to the board's own, whichever is brighter) and its hue. The
@@ -30,6 +32,10 @@ BOARD_REACH = 0.4  # board: out to this much of the H's size around its bounding
 MIN_SIDE_PX = 6  # frame patches smaller than this are not compared
 MAX_SIDE_PX = 96  # larger ones are compared at this size
 DARK_LUMA = 40.0  # a board this dark has no reliable hue
+# A camera's pixel integrates light: the reference warped point by point is sharper
+# than any frame, which matters to a pattern a few pixels across.
+FRAME_BLUR_PX = 0.6
+PICK_BLUR_PX = 1.0  # where the board's and the H's levels are read: pixels this blur leaves pure
 _LUMA = np.array([0.114, 0.587, 0.299])
 
 
@@ -83,30 +89,13 @@ def compare(
     x0, y0, x1, y1 = max(x0, 0), max(y0, 0), min(x1, fw), min(y1, fh)
     if x1 - x0 < MIN_SIDE_PX or y1 - y0 < MIN_SIDE_PX:
         return NOTHING
-    # The pyramid level about as fine as the frame's view of it.
-    frame_span = min(float(np.ptp(outer_px, axis=0).max()), MAX_SIDE_PX)
-    ref_span = (1.0 + 2.0 * BOARD_REACH) * size * px_per_m
-    ratio = max(ref_span / max(frame_span, 1.0), 1.0)
-    level = int(np.clip(math.floor(math.log2(ratio)), 0, len(pyramid) - 1))
-    ref = pyramid[level]
-    k = 2.0**level
-    h0, w0 = pyramid[0].shape[:2]
-    # Level pixel (u, v) is level-0 pixel (k u, k v) (pyrDown centres its kernel on
-    # even pixels) -> pad metres (y up, origin at the picture's centre).
-    to_m = np.array(
-        [
-            [k / px_per_m, 0.0, (0.5 - w0 / 2.0) / px_per_m],
-            [0.0, -k / px_per_m, (h0 / 2.0 - 0.5) / px_per_m],
-            [0.0, 0.0, 1.0],
-        ]
-    )
     # Large views are compared at most MAX_SIDE_PX across: enough for a pattern.
     f = min(1.0, MAX_SIDE_PX / max(x1 - x0, y1 - y0))
+    frame_span = f * float(np.ptp(outer_px, axis=0).max())
+    ref_span = (1.0 + 2.0 * BOARD_REACH) * size * px_per_m
     shift = np.array([[f, 0.0, -f * x0], [0.0, f, -f * y0], [0.0, 0.0, 1.0]])
-    M = shift @ H @ to_m
     dsize = (max(1, round(f * (x1 - x0))), max(1, round(f * (y1 - y0))))
-    warped = cv2.warpPerspective(ref, M, dsize, flags=cv2.INTER_LINEAR, borderValue=(-1,) * 4)
-    seen = warped[..., 3] >= 0  # inside the reference picture
+    warped, seen = _warp(pyramid, px_per_m, ref_span / max(frame_span, 1.0), shift @ H, dsize)
     near = _polygon_mask(f * (inner_px - [x0, y0]), dsize) & seen
     around = _polygon_mask(f * (outer_px - [x0, y0]), dsize) & seen
     if np.count_nonzero(near) < MIN_SIDE_PX * MIN_SIDE_PX:
@@ -118,16 +107,85 @@ def compare(
     # (the quarter nearest each end, leaving out the blurred edges between).
     if not around.any():  # a degenerate outline (a fuzzed or odd reference)
         return Comparison(ncc, math.nan, math.nan, math.nan)
-    low, high = np.percentile(ch_ref[around], [5, 95])
+    # Taken on the reference blurred as a camera's frame is, so that on a small view
+    # they are the pixels that blur leaves pure (a board a few pixels wide between
+    # the H and the pad's bars takes the paint's light a pixel out).
+    pick = _blurred(warped, seen, PICK_BLUR_PX * f)[..., 3]
+    low, high = np.percentile(pick[around], [5, 95])
     spread = high - low
-    board = around & (ch_ref <= low + 0.25 * spread)
-    paint = near & (ch_ref >= high - 0.25 * spread)
+    board = around & (pick <= low + 0.25 * spread)
+    paint = near & (pick >= high - 0.25 * spread)
     if np.count_nonzero(board) < 8 or np.count_nonzero(paint) < 4:
         return Comparison(ncc, math.nan, math.nan, math.nan)
     frame = _crop(frame_bgr, x0, y0, x1, y1, dsize)
     b_f, b_r = np.median(frame[board], axis=0), np.median(warped[..., :3][board], axis=0)
     p_f, p_r = np.median(frame[paint], axis=0), np.median(warped[..., :3][paint], axis=0)
     return Comparison(ncc, _relative(b_f, p_f), _relative(b_r, p_r), _hue(b_f, b_r))
+
+
+def pad_pattern(
+    frame_channel: np.ndarray,
+    pyramid: tuple[np.ndarray, ...],
+    px_per_m: float,
+    outline_m: np.ndarray,
+    H: np.ndarray,
+) -> float:
+    """Correlation of the frame's channel with the reference's over the pad's
+    outline (``outline_m``: its corners, pad metres), the reference blurred by
+    ``FRAME_BLUR_PX``; nan when too little of it is on the frame."""
+    outline_px = apply_h(H, outline_m)
+    fh, fw = frame_channel.shape[:2]
+    x0, y0 = np.maximum(np.floor(outline_px.min(axis=0)).astype(int) - 1, 0)
+    x1, y1 = np.ceil(outline_px.max(axis=0)).astype(int) + 2
+    x1, y1 = min(x1, fw), min(y1, fh)
+    if x1 - x0 < MIN_SIDE_PX or y1 - y0 < MIN_SIDE_PX or x1 - x0 > 4 * MAX_SIDE_PX:
+        return math.nan
+    ref_span = float(np.ptp(outline_m, axis=0).max()) * px_per_m
+    frame_span = float(np.ptp(outline_px, axis=0).max())
+    shift = np.array([[1.0, 0.0, -x0], [0.0, 1.0, -y0], [0.0, 0.0, 1.0]])
+    dsize = (int(x1 - x0), int(y1 - y0))
+    warped, seen = _warp(pyramid, px_per_m, ref_span / max(frame_span, 1.0), shift @ H, dsize)
+    inside = _polygon_mask(outline_px - [x0, y0], dsize) & seen
+    if np.count_nonzero(inside) < MIN_SIDE_PX * MIN_SIDE_PX:
+        return math.nan
+    ch_ref = _blurred(warped, seen, FRAME_BLUR_PX)[..., 3]
+    ch_frame = frame_channel[y0:y1, x0:x1].astype(np.float32)
+    return _ncc(ch_frame[inside], ch_ref[inside])
+
+
+def _warp(
+    pyramid: tuple[np.ndarray, ...], px_per_m: float, ratio: float, M: np.ndarray, dsize
+) -> tuple[np.ndarray, np.ndarray]:
+    """The reference warped by ``M`` (pad metres -> output pixels) from the pyramid
+    level about as fine as the output (``ratio``: reference over output pixels at
+    level 0), and where it is inside the reference picture."""
+    level = int(np.clip(math.floor(math.log2(max(ratio, 1.0))), 0, len(pyramid) - 1))
+    k = 2.0**level
+    h0, w0 = pyramid[0].shape[:2]
+    # Level pixel (u, v) is level-0 pixel (k u, k v) (pyrDown centres its kernel on
+    # even pixels) -> pad metres (y up, origin at the picture's centre).
+    to_m = np.array(
+        [
+            [k / px_per_m, 0.0, (0.5 - w0 / 2.0) / px_per_m],
+            [0.0, -k / px_per_m, (h0 / 2.0 - 0.5) / px_per_m],
+            [0.0, 0.0, 1.0],
+        ]
+    )
+    warped = cv2.warpPerspective(
+        pyramid[level], M @ to_m, dsize, flags=cv2.INTER_LINEAR, borderValue=(-1,) * 4
+    )
+    return warped, warped[..., 3] >= 0
+
+
+def _blurred(warped: np.ndarray, seen: np.ndarray, sigma: float) -> np.ndarray:
+    """``warped`` blurred by ``sigma`` pixels within the reference picture (what lies
+    outside it is no colour to blur in)."""
+    if sigma < 0.2:
+        return warped
+    w = seen.astype(np.float32)
+    num = cv2.GaussianBlur(warped * w[..., None], (0, 0), sigma)
+    den = cv2.GaussianBlur(w, (0, 0), sigma)[..., None]
+    return np.where(seen[..., None], num / np.maximum(den, 1e-6), warped)
 
 
 def _crop(image: np.ndarray, x0: int, y0: int, x1: int, y1: int, dsize) -> np.ndarray:
