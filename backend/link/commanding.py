@@ -302,6 +302,23 @@ class LinkCommands(LinkCore):
         msg = mavlink2.MAVLink_param_request_list_message(target[0], target[1])
         return self._send_unacked("param_request_list", msg)
 
+    def request_param_index(self, index: int) -> CommandResult:
+        """Ask for one parameter by its index (PARAM_REQUEST_READ with ``param_index``), as
+        a download fills the gaps a list left. Not acknowledged: ``ok`` means sent."""
+        name = "param_request_read"
+        if isinstance(index, bool) or not isinstance(index, int) or not 0 <= index <= 0x7FFF:
+            return self._invalid(name, ValueError(f"index must be 0 .. 32767, got {index!r}"))
+        target = self._target or (1, 1)
+        msg = mavlink2.MAVLink_param_request_read_message(target[0], target[1], b"", index)
+        return self._send_unacked(name, msg)
+
+    def missing_params(self) -> tuple[list[int], int]:
+        """The indices of the parameters not heard since the vehicle's latest boot, and how
+        many it says it has (0, and none missing, before its first PARAM_VALUE)."""
+        with self._param_cond:
+            count = self._param_count
+            return [i for i in range(count) if i not in self._param_indices], count
+
     def param_table(self) -> tuple[dict[str, tuple[float, int]], int]:
         """Every parameter heard so far, name -> (value, MAV_PARAM_TYPE), and how many
         the vehicle says it has (0 before its first PARAM_VALUE)."""

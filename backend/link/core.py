@@ -76,6 +76,7 @@ class LinkCore:
     _param_cond: threading.Condition
     _params: dict[str, tuple[float, int, float]]
     _param_count: int
+    _param_indices: set[int]
     _written_in_boot: dict[str, int]
     _statustexts: StatusTextAssembler
     _landing_targets: int

@@ -146,6 +146,10 @@ class LinkReceiver(LinkCore):
         if changes.get("boots", old.boots) != old.boots:
             # What the cache holds came from the previous boot.
             self._latest = {k: v for k, v in self._latest.items() if k == "HEARTBEAT"}
+            with self._param_cond:
+                # The new boot may number its parameters otherwise (an enabled subsystem
+                # adds some): the indices heard count no more; the values stay.
+                self._param_indices.clear()
             log.info("the vehicle rebooted (its clock went back to %d ms)", boot_ms)
         if changes.get("position_stale") and not old.position_stale:
             log.warning("LOCAL_POSITION_NED stopped: the position is no longer current")
@@ -216,4 +220,9 @@ class LinkReceiver(LinkCore):
             count = int(getattr(msg, "param_count", 0) or 0)
             if 0 < count < 0xFFFF:
                 self._param_count = count
+            # Which of them this is: a download asks for the missing ones by index. A
+            # PARAM_SET's echo has none (65535, as ArduPilot sends -1).
+            index = int(getattr(msg, "param_index", -1))
+            if 0 <= index < self._param_count:
+                self._param_indices.add(index)
             self._param_cond.notify_all()

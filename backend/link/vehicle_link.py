@@ -165,6 +165,7 @@ class VehicleLink(LinkCommands, LinkReceiver, LinkHousekeeping):
         self._param_cond = threading.Condition()
         self._params: dict[str, tuple[float, int, float]] = {}  # name -> value, type, rx time
         self._param_count = 0  # how many parameters the vehicle says it has
+        self._param_indices: set[int] = set()  # indices heard since the vehicle's boot
         self._written_in_boot: dict[str, int] = {}  # name -> Telemetry.boots when written
         self._statustexts = StatusTextAssembler()
         self._landing_targets = 0

@@ -25,11 +25,18 @@ from backend.missions.extnav import (
 from backend.services.events import EventLog
 from backend.services.param_meta import META, check_value
 
-#: How long a full parameter download may take (a telemetry radio: ~800 params at 57600 baud).
+#: A parameter download gives up when no new parameter came for this long (a telemetry
+#: radio sends ~800 params in ~20 s at 57600 baud; the vehicle was asked again meanwhile) ...
 LIST_TIMEOUT_S = 20.0
-#: No new parameter for this long: ask for the list again (at most LIST_ASKS times).
+#: ... and in any case after this long: a slow link that keeps delivering is not cut off.
+LIST_MAX_S = 120.0
+#: No new parameter for this long: the list stalled. Asked again while none of it came
+#: (a lost request, a vehicle still booting), at most LIST_ASKS times; once some came,
+#: the missing ones are asked for by index, READ_BATCH at a time (as MAVProxy and
+#: QGroundControl fill the gaps; a radio link is not flooded).
 LIST_STALL_S = 2.0
 LIST_ASKS = 4
+READ_BATCH = 20
 #: PLND_LAG's documented range (s).
 LAG_RANGE_S = (0.02, 0.25)
 #: Result -> LANDING_TARGET on the link, added to the measured capture -> result (ms):
@@ -151,39 +158,16 @@ class ParamService:
         }
 
     def refresh(self, timeout_s: float = LIST_TIMEOUT_S) -> dict[str, Any]:
-        """Download every parameter (PARAM_REQUEST_LIST); returns :meth:`listing`.
+        """Download every parameter (PARAM_REQUEST_LIST, then the gaps by index); returns
+        :meth:`listing`.
 
-        Waits until the vehicle sent as many as it says it has, or ``timeout_s``; the
-        listing says how many came.
+        Waits until the vehicle sent as many as it says it has, or nothing new came for
+        ``timeout_s`` (:data:`LIST_MAX_S` at most); the listing says how many came.
         """
         if self._link.state != LinkState.UP:
             raise ConnectionError("the link to the vehicle is down; no parameters were read")
         with self._lock:
-            deadline = time.monotonic() + timeout_s
-            asked = 0
-            heard, heard_at = -1, 0.0
-            while time.monotonic() < deadline:
-                table, count = self._link.param_table()
-                if count > 0 and len(table) >= count:
-                    break
-                now = time.monotonic()
-                if self._link.state != LinkState.UP:
-                    # Rebooting, or a radio drop-out: ask again once it is back.
-                    asked = min(asked, LIST_ASKS - 1)
-                    heard_at = -math.inf
-                    time.sleep(0.1)
-                    continue
-                if len(table) != heard:
-                    heard, heard_at = len(table), now
-                # Nothing new for a while (a lost request, a vehicle still booting): ask
-                # again, as ground stations do, a few times.
-                if (asked == 0 or now - heard_at > LIST_STALL_S) and asked < LIST_ASKS:
-                    sent = self._link.request_param_list()
-                    if not sent.ok:
-                        raise ConnectionError(sent.detail)
-                    asked += 1
-                    heard_at = now
-                time.sleep(0.05)
+            _Download(self._link, timeout_s).run()
             self.fetched_at = time.time()
         return self.listing()
 
@@ -378,6 +362,74 @@ class ParamService:
         if why:
             text += f" ({why})"
         self._events.emit("param", text, {**write.to_dict(), "why": why})
+
+
+class _Download:
+    """One parameter download on ``link`` (see :meth:`ParamService.refresh`)."""
+
+    def __init__(self, link: VehicleLink, timeout_s: float) -> None:
+        self._link = link
+        self._timeout_s = timeout_s
+        self._started = time.monotonic()
+        self._progress: tuple[int, int] = (-1, -1)  # (names, indices) heard at the last look
+        self._heard_at = self._started  # when a new parameter last came
+        self._asked_at = -math.inf  # the latest ask (the list or a batch of missing ones)
+        self._back = False  # the link came back: ask again at once
+        self._list_asks = 0
+        self._heard_at_list_ask = 0  # indices heard when the list was last asked for
+        self._batch: set[int] = set()  # the missing indices last asked for
+
+    def run(self) -> None:
+        while (now := time.monotonic()) < self._deadline():
+            table, _ = self._link.param_table()
+            missing, count = self._link.missing_params()
+            if count > 0 and (not missing or len(table) >= count):
+                return  # whole
+            if self._link.state != LinkState.UP:
+                # Rebooting, or a radio drop-out: ask again once it is back (a rebooted
+                # vehicle forgot the list it was sending: it may be asked for once more).
+                self._list_asks = min(self._list_asks, LIST_ASKS - 1)
+                self._back = True
+                time.sleep(0.1)
+                continue
+            self._note_progress((len(table), count - len(missing)), now)
+            self._ask(missing, count, now)
+            time.sleep(0.05)
+
+    def _deadline(self) -> float:
+        # measured from the latest new parameter: a link that keeps delivering goes on
+        return min(self._started + LIST_MAX_S, self._heard_at + self._timeout_s)
+
+    def _note_progress(self, progress: tuple[int, int], now: float) -> None:
+        if progress != self._progress:
+            if self._progress[0] >= 0:
+                self._heard_at = now
+            self._progress = progress
+
+    def _ask(self, missing: list[int], count: int, now: float) -> None:
+        """Ask for the list at first, and again while none of it came; once some came,
+        for the missing ones by index (when the list stalls, or the last batch came)."""
+        heard = count - len(missing)
+        batch_came = bool(self._batch) and self._batch.isdisjoint(missing)
+        stalled = self._back or now - max(self._heard_at, self._asked_at) > LIST_STALL_S
+        if self._list_asks == 0 or (
+            stalled and heard <= self._heard_at_list_ask and self._list_asks < LIST_ASKS
+        ):
+            self._send(self._link.request_param_list())
+            self._list_asks += 1
+            self._asked_at, self._heard_at_list_ask = now, heard
+            self._batch = set()
+        elif count > 0 and (stalled or batch_came):
+            self._batch = set(missing[:READ_BATCH])
+            for index in missing[:READ_BATCH]:
+                self._send(self._link.request_param_index(index))
+            self._asked_at = now
+        self._back = False
+
+    def _send(self, sent: CommandResult) -> None:
+        # the link going down meanwhile is handled by run(): it asks again once back
+        if not sent.ok and self._link.state == LinkState.UP:
+            raise ConnectionError(sent.detail)
 
 
 def _setup_answer(

@@ -462,6 +462,7 @@ class VehicleServer:
             self._ack(msg, command, ACCEPTED)
             sim.reboot(REBOOT_SILENCE_S)
             self._home_sent = None
+            self._param_queue.clear()  # a list it was sending is forgotten
             self._silent_until = sim.time_s + REBOOT_SILENCE_S
             return None
         return UNSUPPORTED
@@ -556,7 +557,10 @@ class VehicleServer:
     def _on_param_request_list(self, msg: mavlink.MAVLink_message) -> None:
         if not self._for_us(msg.target_system):
             return
-        # Streamed over the next ticks, as ArduPilot trickles its parameter list.
+        # Streamed over the next ticks, as ArduPilot trickles its parameter list; a
+        # request while it streams starts it again (ArduPilot restarts its send), so
+        # repeated requests never queue a parameter twice.
+        self._param_queue.clear()
         self._param_queue.extend(range(len(self.sim.params)))
 
     def _on_param_request_read(self, msg: mavlink.MAVLink_message) -> None:

@@ -88,6 +88,17 @@ def tel(station: Station) -> dict:
     return station.get("/api/telemetry")[1]
 
 
+def back_from_reboot(station: Station, boots: int, timeout: float = 60.0) -> None:
+    """Wait until the vehicle is back from a reboot asked for after it had rebooted
+    ``boots`` times (its clock went back) and the link is up. Until the link's timeout
+    notices the silence a page still says UP: the next test's click (a parameter
+    download) would find the link down."""
+    deadline = time.monotonic() + timeout
+    while (t := tel(station))["boots"] <= boots or t["state"] != "up":
+        assert time.monotonic() < deadline, f"not back from the reboot: {t['state']}, {t['boots']}"
+        time.sleep(0.1)
+
+
 # --- 1. the strip and ABORT on every screen; camera and landing together at 1280x720 ---
 @pytest.mark.parametrize("size", ["desktop", "laptop", "phone"])
 def test_status_strip_and_abort_stay_in_view_on_every_screen(browser, station, size):
@@ -158,6 +169,7 @@ def test_precision_landing_is_set_up_in_one_step(page, station):
     open_dashboard(page, station)
     plnd = page.get_by_test_id("plnd-state")
     expect(plnd).to_contain_text("Precision landing is off on the vehicle", timeout=20_000)
+    boots = tel(station)["boots"]
     page.get_by_test_id("precland-setup").click()
     confirm(page, expect_text="PLND_LAG = ")
     outcome = page.get_by_test_id("mission-outcome")
@@ -171,6 +183,7 @@ def test_precision_landing_is_set_up_in_one_step(page, station):
     # a reboot we asked for is no alarm
     expect(page.get_by_test_id("alert").filter(has_text="Vehicle link lost")).to_have_count(0)
     assert not page.errors, page.errors
+    back_from_reboot(station, boots)
 
 
 def test_gps_denied_landing_is_set_up_in_one_step(page, station):
@@ -183,6 +196,7 @@ def test_gps_denied_landing_is_set_up_in_one_step(page, station):
     expect(log).to_have_text(back, timeout=30_000)
     extnav = page.get_by_test_id("extnav-state")
     expect(extnav).to_contain_text("GPS-denied landing is not set up", timeout=20_000)
+    boots = tel(station)["boots"]
     page.get_by_test_id("extnav-setup").click()
     confirm(page, expect_text="ARMING_CHECK without the vision check")
     outcome = page.get_by_test_id("mission-outcome")
@@ -191,6 +205,7 @@ def test_gps_denied_landing_is_set_up_in_one_step(page, station):
     expect(extnav).to_contain_text("GPS-denied landing is set up on the vehicle", timeout=30_000)
     expect(log).to_contain_text("parameter VISO_TYPE set from 0 to 1 (external navigation set-up)")
     assert not page.errors, page.errors
+    back_from_reboot(station, boots)
 
 
 def test_parameters_browse_search_edit_checked_and_reboot(page, station):
@@ -219,6 +234,7 @@ def test_parameters_browse_search_edit_checked_and_reboot(page, station):
         "PLND_LAG is now 0.09: reboot the autopilot for it to take effect."
     )
     expect(page.get_by_test_id("param-value-PLND_LAG")).to_contain_text("0.09 s")
+    boots = tel(station)["boots"]
     page.get_by_test_id("reboot").click()
     confirm(page, expect_text="the link drops for a few seconds")
     expect(outcome).to_have_text("Reboot sent: the autopilot is restarting.")
@@ -227,6 +243,7 @@ def test_parameters_browse_search_edit_checked_and_reboot(page, station):
     expect(page.get_by_test_id("event-log")).to_contain_text("parameter PLND_LAG set from")
     expect(page.get_by_test_id("strip-link")).to_have_text("UP", timeout=30_000)
     assert not page.errors, page.errors
+    back_from_reboot(station, boots)
 
 
 # --- 3, 8, 10, 9: one land button; hover at the given altitude; reference switch asks; ABORT ---

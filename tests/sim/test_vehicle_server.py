@@ -526,6 +526,27 @@ def test_param_read_set_and_list(rig: Rig) -> None:
     assert {v.param_id for v in values} >= {"PLND_TYPE", "PLND_EST_TYPE", "SYSID_MYGCS"}
 
 
+def test_a_repeated_param_list_request_restarts_the_list_without_duplicates(rig: Rig) -> None:
+    # ground stations ask again when the list stalls: ArduPilot starts its send again
+    mark = rig.mark()
+    for _ in range(3):
+        rig.send("param_request_list_send", 1, 1)
+    rig.run(1.0)
+    indices = [v.param_index for v in rig.since(mark, "PARAM_VALUE")]
+    assert sorted(indices) == list(range(len(rig.sim.params)))
+    # a reboot forgets the list it was sending
+    mark = rig.mark()
+    rig.send("param_request_list_send", 1, 1)
+    rig.command(mavlink.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, 1)
+    rig.run(5.0)
+    assert rig.since(mark, "PARAM_VALUE") == []
+    # a missing one is asked for by its index
+    mark = rig.mark()
+    rig.send("param_request_read_send", 1, 1, b"", 7)
+    rig.run(0.1)
+    assert [v.param_index for v in rig.since(mark, "PARAM_VALUE")] == [7]
+
+
 # ---------------------------------------------------------------------- precision landing
 def _send_target(rig: Rig, pad: tuple[float, float], frame: int = 12) -> None:
     t = rig.sim.truth

@@ -86,7 +86,8 @@ def list_params(
     responses={**OPERATOR_ERRORS, **errors(503)},
 )
 def refresh_params(params: ParamsDep, vehicle: VehicleDep) -> dict[str, Any]:
-    """Download every parameter from the vehicle (PARAM_REQUEST_LIST); up to 20 s."""
+    """Download every parameter from the vehicle (PARAM_REQUEST_LIST, then any the list
+    lost by index): until all came, or none came for 20 s; 120 s at most."""
     _need_link(vehicle, "no parameters were read")
     try:
         return params.refresh()

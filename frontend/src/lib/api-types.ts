@@ -446,7 +446,8 @@ export interface paths {
         put?: never;
         /**
          * Refresh Params
-         * @description Download every parameter from the vehicle (PARAM_REQUEST_LIST); up to 20 s.
+         * @description Download every parameter from the vehicle (PARAM_REQUEST_LIST, then any the list
+         *     lost by index): until all came, or none came for 20 s; 120 s at most.
          */
         post: operations["refresh_params_api_params_refresh_post"];
         delete?: never;

@@ -55,6 +55,10 @@ export interface CommandOutcome {
 
 export const MISSIONS_UNAVAILABLE = "missions not available yet";
 
+/** A parameter download lasts while the vehicle keeps sending: up to the server's
+ * LIST_MAX_S (backend/services/params.py, 120 s), not the usual timeout. */
+export const PARAM_DOWNLOAD_TIMEOUT_MS = 125_000;
+
 export interface ApiClientOptions {
   baseUrl?: string;
   token?: () => string | null;
@@ -162,7 +166,7 @@ export class ApiClient {
   }
 
   refreshParams(): Promise<ParamListing> {
-    return this.request("POST", "/api/params/refresh");
+    return this.request("POST", "/api/params/refresh", undefined, PARAM_DOWNLOAD_TIMEOUT_MS);
   }
 
   writeParam(name: string, value: number): Promise<ParamWriteResult> {
@@ -245,7 +249,7 @@ export class ApiClient {
     }
   }
 
-  async request<T>(method: string, path: string, body?: unknown): Promise<T> {
+  async request<T>(method: string, path: string, body?: unknown, timeoutMs = this.timeoutMs): Promise<T> {
     const headers: Record<string, string> = { Accept: "application/json" };
     const token = this.token();
     if (token) headers.Authorization = `Bearer ${token}`;
@@ -257,7 +261,7 @@ export class ApiClient {
       payload = JSON.stringify(body);
     }
     const controller = new AbortController();
-    const timer = setTimeout(() => controller.abort(), this.timeoutMs);
+    const timer = setTimeout(() => controller.abort(), timeoutMs);
     let response: Response;
     try {
       response = await this.fetchFn(this.url(path), {
@@ -268,7 +272,7 @@ export class ApiClient {
       });
     } catch (error) {
       const why = controller.signal.aborted
-        ? `no answer within ${this.timeoutMs / 1000} s`
+        ? `no answer within ${timeoutMs / 1000} s`
         : "the server cannot be reached";
       throw new ApiError(0, `${method} ${path}: ${why}.`, { cause: String(error) });
     } finally {

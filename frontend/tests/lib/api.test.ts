@@ -217,6 +217,16 @@ describe("ApiClient", () => {
     expect(err.message).toContain("no answer within 0.15 s");
   });
 
+  it("waits longer for a parameter download than for other calls", async () => {
+    // answers after the client's usual timeout (the same event loop: its timer fires first)
+    const listing = { count: 2, received: 2, complete: true, fetched_at: 1, params: [] };
+    handler = (_req, _b, res) => setTimeout(() => json(res, 200, listing), 300);
+    const api = new ApiClient({ baseUrl: base, timeoutMs: 150 });
+    const err = (await api.params().catch((e: unknown) => e)) as ApiError;
+    expect(err.message).toContain("no answer within 0.15 s");
+    expect((await api.refreshParams()).complete).toBe(true);
+  });
+
   it("makes server paths absolute and leaves full URLs alone", () => {
     const api = new ApiClient({ baseUrl: "http://h:1" });
     expect(api.url("/api/references/1/image/corners")).toBe("http://h:1/api/references/1/image/corners");
