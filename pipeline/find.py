@@ -46,6 +46,7 @@ SMALL_H_PX = 14.0  # an H this small counts only with the rest of its pad found
 # (10-20 m), true pads' came to 0.69-0.92 (most over 0.78), clear look-alikes' (an H's
 # evidence over MIN_EVIDENCE) to 0.72 at most.
 MIN_PAD_NCC = 0.78
+BARE_H_PX = 32.0  # the same for a dark H on a plain light board (`_framed_below_px`)
 # Evidence (candidates.Located.evidence) at which an H needs no check that it stands out
 # from its board: on the bench, no look-alike or texture reaching it stood out less than
 # 5.5 (the check's bar: 3), while pads under a shadow's edge reached it standing out 1.5-2.8.
@@ -256,7 +257,7 @@ def _check(
         # (which a look-alike mark on the floor has not).
         if whole_pad(hit.fit.H, reference, binary.levels, any_size=True) is hit.fit.H:
             return "unclear"
-    elif span < SMALL_H_PX and not _small_pad_around(hit, binary, reference):
+    elif span < _framed_below_px(reference) and not _small_pad_around(hit, binary, reference):
         # A few pixels of H-shaped texture are everywhere: so small, the H is the
         # pad's only where the rest of the pad (its rim, bars, rings) is found too.
         return "unframed"
@@ -284,12 +285,31 @@ def _check(
     return ""
 
 
+def _framed_below_px(reference: Reference) -> float:
+    """The H's span (frame pixels) under which the rest of its pad must be found."""
+    return BARE_H_PX if _plain_light_board(reference) else SMALL_H_PX
+
+
+def _plain_light_board(reference: Reference) -> bool:
+    """Whether the pad is a dark H on a plain light board (no marks of the H's paint).
+
+    Such a pad differs from the same H painted on a floor by its board alone. The
+    board check does not see it (it reads the board's level against the brighter of
+    board and H: here the board itself), nor does the whole pad's pattern (the H on
+    a plain ground is the look-alike's too): on the bench's views at 8-22 m, dark H's
+    painted on concrete passed every check up to 28 px, in 3-7 of 15 empty frames.
+    Its board's rim is what tells them apart. (Reading the board against the H
+    instead, those floors still came within its tolerance from afar.)
+    """
+    return reference.polarity == "dark" and not reference.painted_marks
+
+
 def _small_pad_around(hit: Located, binary: Binarized, reference: Reference) -> bool:
     """Whether the rest of the pad is found around a small H: its marks' edges, or
     (the marks a pixel or two wide, their edges merged) the whole pad's pattern."""
     if whole_pad(hit.fit.H, reference, binary.levels, any_size=True) is not hit.fit.H:
         return True
-    if reference.marks_model is None:
+    if reference.marks_model is None or _plain_light_board(reference):
         return False
     pattern = pad_pattern(
         binary.smooth,

@@ -84,6 +84,12 @@ class Reference:
             return None
         return EdgeModel.from_polygons([(m.corners_m, m.bright) for m in self.marks])
 
+    @property
+    def painted_marks(self) -> bool:
+        """Whether the pad shows marks in the H's paint (bars, rings, stars) besides
+        its board's rim: what makes its pattern other than an H's on a plain ground."""
+        return any(m.bright for m in self.marks)
+
     @cached_property
     def pose_points_m(self) -> np.ndarray:
         """The pad's points a pose is fitted to: the H's corners and the marks' vertices."""
