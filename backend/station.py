@@ -196,7 +196,8 @@ def build_station(settings: Settings) -> Station:
             link,
             settings,
             url=url,
-            approach_alt=lambda: approach_altitude(references.current(), camera),
+            # (the worker, started below, before any request can ask)
+            approach_alt=lambda: approach_altitude(references.current(), worker.camera_seen()),
         )
 
         camera = _camera_model(settings)
@@ -353,6 +354,8 @@ def approach_altitude(reference: Reference | None, camera: Camera) -> float | No
     >>> pad = Reference.from_image(make_pad_image(400), 0.55)
     >>> approach_altitude(pad, Camera.from_fov(640, 480, 60.0))
     4.4
+    >>> approach_altitude(pad, Camera.from_fov(1280, 720, 60.0))
+    8.7
     """
     if reference is None:
         return None

@@ -98,6 +98,7 @@ class VisionWorker:
         self._reference = reference
         self._camera = camera
         self._cameras: dict[tuple[int, int], Camera] = {(camera.width, camera.height): camera}
+        self._seen = camera  # at the size of the latest frame processed
         self._process = process
         self._hints = hints
         self._join_timeout = join_timeout
@@ -153,12 +154,19 @@ class VisionWorker:
                 last_error=self._last_error,
             )
 
+    def camera_seen(self) -> Camera:
+        """The camera at the size of the frames it sends (the model's own size before
+        the first): how far the pad can be found depends on the frames' pixels, and a
+        camera described by its field of view alone is modelled 640 px wide."""
+        return self._seen
+
     def _camera_for(self, image: np.ndarray) -> Camera:
         h, w = image.shape[:2]
         cam = self._cameras.get((w, h))
         if cam is None:
             cam = self._camera.scaled(w, h)
             self._cameras[(w, h)] = cam
+        self._seen = cam
         return cam
 
     def _run(self) -> None:

@@ -25,6 +25,9 @@ from pipeline.template import reference_pyramid
 H_CORNERS = 12
 RELIABLE_H_PX = 28.0  # an H this many pixels across is found in nearly every frame
 SEARCH_WIDTH_PX = 640  # frames are searched this wide first (pipeline.frame)
+# Frames are searched at their own resolution last (pipeline.frame); the range that buys
+# was measured on frames up to this wide (bench --sweep altitude): wider ones count as it.
+MEASURED_WIDTH_PX = 1280
 # OpenCV's warps (the frames' template check) take pictures under 32767 px a side.
 MAX_SIDE_PX = 16384
 _WORK_MAX = 1024  # pictures are measured at up to this many pixels a side
@@ -134,16 +137,22 @@ class Reference:
         return reference_pyramid(picture, self.channel)
 
     def reliable_altitude_m(self, camera: Camera, min_h_px: float = RELIABLE_H_PX) -> float:
-        """The height up to which this pad's H spans ``min_h_px`` in the frames the
-        pipeline searches (``camera``'s width brought down to 640 px), looking
+        """The height up to which this pad's H spans ``min_h_px`` of ``camera``'s own
+        pixels (a camera over ``MEASURED_WIDTH_PX`` wide counted as that wide), looking
         straight down: where missions can expect to find the pad.
+
+        On the bench's frames the default pad is found in every frame up to where its
+        H spans 13 px, at 640 x 480 as at 1280 x 720 (12 and 24 m); thin strokes need
+        more (a 9 % leg: 14 of 15 frames at 25 px). ``min_h_px`` keeps a margin for both.
 
         >>> from pipeline.render import make_pad_image
         >>> ref = Reference.from_image(make_pad_image(400), 0.55)
         >>> round(ref.reliable_altitude_m(Camera.from_fov(640, 480, 60.0)), 1)
         5.4
+        >>> round(ref.reliable_altitude_m(Camera.from_fov(1280, 720, 60.0)), 1)
+        10.9
         """
-        fx = camera.fx * min(1.0, SEARCH_WIDTH_PX / camera.width)
+        fx = camera.fx * min(1.0, MEASURED_WIDTH_PX / camera.width)
         return fx * self.h_size_m / min_h_px
 
     @property

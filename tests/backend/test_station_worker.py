@@ -164,3 +164,19 @@ def test_close_joins_the_thread(pad_frame):
     worker, _ = run_worker(RenderedSource(frame, 30), reference, results(1))
     worker.close()  # idempotent
     assert threading.active_count() <= before
+
+
+def test_the_camera_seen_is_the_model_at_the_frames_size(pad_frame):
+    reference, frame = pad_frame
+    wide = np.ascontiguousarray(np.repeat(np.repeat(frame, 2, axis=0), 2, axis=1))  # 1280x960
+    source = RenderedSource(wide, rate_hz=30)
+    seen = {}
+
+    def until(worker, got):
+        seen["camera"] = worker.camera_seen()
+        return bool(got)
+
+    run_worker(source, reference, until)
+    camera = seen["camera"]
+    assert (camera.width, camera.height) == (1280, 960)
+    assert camera.fx == pytest.approx(2 * CAMERA.fx)
