@@ -20,7 +20,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from backend.link import commands as cmd
 from backend.link.commands import CommandResult
 from backend.link.connection import SendError
-from backend.link.core import _REASON_GRACE_S, _RESENT_ACK_WAIT_S, LinkCore
+from backend.link.core import _REASON_GRACE_S, _REBOOT_HOLD_S, _RESENT_ACK_WAIT_S, LinkCore
 from backend.link.modes import mode_number
 from backend.link.state import LinkState
 
@@ -94,9 +94,14 @@ class LinkCommands(LinkCore):
         """Reboot the autopilot (MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN param1 = 1).
 
         ArduCopter refuses while armed. Needed for settings read at boot, such as
-        PLND_TYPE. The link goes LOST while the vehicle restarts and comes back by itself.
+        PLND_TYPE. Once accepted the link is LOST at once (commands meanwhile answer
+        LINK_DOWN, not a timeout) and comes back by itself with the new boot's heartbeat.
         """
-        return self._command_long("reboot", mavlink2.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, (1,))
+        result = self._command_long("reboot", mavlink2.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, (1,))
+        if result.ok:
+            self._rebooting_until = time.monotonic() + _REBOOT_HOLD_S
+            self._set_state(LinkState.LOST, "the vehicle is rebooting")
+        return result
 
     def goto_local_ned(
         self, north: float, east: float, down: float, *, yaw_deg: float | None = None
@@ -373,7 +378,9 @@ class LinkCommands(LinkCore):
 
     def _link_down(self, name: str) -> CommandResult:
         state = self._state
-        if state == LinkState.LOST:
+        if state == LinkState.LOST and time.monotonic() < self._rebooting_until:
+            why = "the link is lost: the vehicle is rebooting"
+        elif state == LinkState.LOST:
             why = "the link is lost (no heartbeat from the vehicle)"
         elif state == LinkState.CLOSED:
             why = "the link is closed"

@@ -31,6 +31,9 @@ log = logging.getLogger("backend.link.vehicle_link")
 _TICK_S = 0.1  # housekeeping period: heartbeat loss is noticed within 0.1 s
 _REASON_GRACE_S = 0.4  # refusal texts may trail the COMMAND_ACK
 _RESENT_ACK_WAIT_S = 0.5  # how long to wait for the ACK of a retransmitted command
+# After an accepted reboot the link is down at once; a heartbeat sent before the restart
+# (ArduPilot answers, then restarts) must not bring it back: no autopilot boots this fast.
+_REBOOT_HOLD_S = 1.0
 _BACKOFF_S = (0.25, 2.0)  # reopen delay: first, largest
 _EVENT_QUEUE = 1000
 _JOIN_S = 2.0
@@ -65,6 +68,7 @@ class LinkCore:
     _latest: dict[str, Any]
     _target: tuple[int, int] | None
     _last_hb: float | None
+    _rebooting_until: float
     _rx_count: int
     _handler_errors: int
     _implausible: int

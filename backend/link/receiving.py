@@ -69,6 +69,8 @@ class LinkReceiver(LinkCore):
                     backoff = min(backoff * 2, _BACKOFF_S[1])
                     continue
                 backoff = _BACKOFF_S[0]
+                # a new connection (SITL restarts its process): what answers is the new boot
+                self._rebooting_until = 0.0
                 self._apply({"reconnects": max(0, transport.opened - 1)})
                 self._wake.set()  # heartbeat at once: a UDP/TCP vehicle learns about us
                 continue
@@ -114,7 +116,7 @@ class LinkReceiver(LinkCore):
             if src != self._target:
                 return
             self._last_hb = now
-            if self._state != LinkState.UP:
+            if self._state != LinkState.UP and now >= self._rebooting_until:
                 self._set_state(LinkState.UP, f"heartbeat from system {src[0]}")
         target = self._target
         if target is None or src[0] != target[0]:
@@ -151,9 +153,16 @@ class LinkReceiver(LinkCore):
                 # adds some): the indices heard count no more; the values stay.
                 self._param_indices.clear()
             log.info("the vehicle rebooted (its clock went back to %d ms)", boot_ms)
+            rebooting = self._state == LinkState.LOST and self._rebooting_until > 0.0
+        else:
+            rebooting = False
         if changes.get("position_stale") and not old.position_stale:
             log.warning("LOCAL_POSITION_NED stopped: the position is no longer current")
         self._apply(changes)
+        if rebooting:
+            # the new boot is heard (its heartbeat came first): no need to wait out the hold
+            self._rebooting_until = 0.0
+            self._set_state(LinkState.UP, "the vehicle is back from its reboot")
 
     def _apply_handler(
         self, handler: Callable[[Any, float], dict[str, Any]], msg: Any, now: float

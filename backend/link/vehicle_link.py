@@ -151,6 +151,7 @@ class VehicleLink(LinkCommands, LinkReceiver, LinkHousekeeping):
         self._latest: dict[str, Any] = {}
         self._target: tuple[int, int] | None = None
         self._last_hb: float | None = None
+        self._rebooting_until = 0.0  # monotonic time: heartbeats before it are the old boot's
         self._rx_count = 0
         self._handler_errors = 0
         self._implausible = 0

@@ -2,7 +2,7 @@
 // and documented range before anything is sent, then confirmed), reboot, and the
 // one-step precision-landing set-up. Every write is recorded in the events.
 
-import { ApiError, describeFailure, type ParamInfo, type ParamListing } from "../lib/api";
+import { ApiError, type CommandOutcome, describeFailure, type ParamInfo, type ParamListing } from "../lib/api";
 import { fmtDate } from "../lib/format";
 import { sentence } from "../lib/messages";
 import { confirmDialog } from "./confirm-dialog";
@@ -146,8 +146,16 @@ export function mountParamsPanel(root: HTMLElement, ctx: Ctx): { load(): void } 
       danger: true,
     });
     if (!yes) return;
-    const r = await api.reboot();
-    if (r.ok) ctx.store.rebootingUntil = Date.now() + 30000;
+    // The link drops as soon as the vehicle accepts, before this answer comes.
+    ctx.store.rebootingUntil = Date.now() + 30000;
+    let r: CommandOutcome;
+    try {
+      r = await api.reboot();
+    } catch (error) {
+      ctx.store.rebootingUntil = 0;
+      throw error;
+    }
+    if (!r.ok) ctx.store.rebootingUntil = 0;
     say(r.ok, r.ok ? "Reboot sent: the autopilot is restarting." : sentence("Reboot not done", r.message));
     if (r.status === 401) document.dispatchEvent(new CustomEvent("visland:need-token"));
   });

@@ -185,6 +185,47 @@ def test_refused_arm_returns_the_reasons_verbatim(peer: Any, make_link) -> None:
     assert _wait_event(seen, "statustext") is not None
 
 
+def test_an_accepted_reboot_takes_the_link_down_at_once(peer: Any, make_link) -> None:
+    # The vehicle acknowledges, then goes silent while it restarts: a command sent in
+    # that silence is answered at once as link-down, not sent to time out (what the
+    # fuzz met: a LAND after a reboot got 504 "no COMMAND_ACK within 3 s").
+    def restart(p: Any, msg: Any) -> bool:
+        if msg.get_type() == "COMMAND_LONG" and msg.command == 246:
+            p.heartbeats = False
+            p.ack(msg.command, mavlink2.MAV_RESULT_ACCEPTED)
+            return True
+        return False
+
+    peer.responder = restart
+    link = make_link(f"tcp:127.0.0.1:{peer.port}", heartbeat_timeout_s=30.0)
+    assert _up(link)
+    assert link.reboot().ok
+    assert link.telemetry.state == LinkState.LOST
+    landing = link.land()
+    assert landing.result_name == "LINK_DOWN" and "rebooting" in landing.detail
+    assert not [m for m in peer.messages("COMMAND_LONG") if m.command == 21]  # none sent
+    peer.heartbeats = True  # booted
+    assert _up(link, 20.0)
+    assert link.land().ok
+
+
+def test_heartbeats_of_the_boot_being_left_do_not_bring_the_link_back(peer: Any, make_link) -> None:
+    # ArduPilot answers the reboot and restarts a moment later: its last heartbeats
+    # must not say the link is up again while the vehicle goes away.
+    link = make_link(f"tcp:127.0.0.1:{peer.port}", heartbeat_timeout_s=30.0)
+    seen = _events(link)
+    assert _wait_event(seen, "link_up", 20.0) is not None  # connected
+    seen.clear()
+    asked = time.monotonic()
+    assert link.reboot().ok  # the peer acknowledges and keeps its 10 Hz heartbeats
+    back = _wait_event(seen, "link_up", 20.0)
+    assert back is not None
+    assert time.monotonic() - asked >= 1.0  # held for the hold, at least
+    lost = [e for e in seen if e.kind == "link_lost"]
+    assert lost and lost[0].data["reason"] == "the vehicle is rebooting"
+    assert seen.index(lost[0]) < seen.index(back)
+
+
 def test_accepted_commands_and_their_wire_format(peer: Any, make_link) -> None:
     link = make_link(f"tcp:127.0.0.1:{peer.port}")
     assert _up(link)
