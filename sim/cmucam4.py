@@ -282,9 +282,12 @@ class CMUcam4Board:
 
     # --- the byte level ----------------------------------------------------------------
     def _host_baud(self) -> int | None:
+        slave = self._slave
+        if slave < 0:  # closed under a board still serving (close() gave up waiting)
+            raise _Gone
         try:
             buf = array.array("i", [0] * 16)
-            fcntl.ioctl(self._slave, _TCGETS2, buf)
+            fcntl.ioctl(slave, _TCGETS2, buf)
             return struct.unpack_from("I", buf.tobytes(), 36)[0]
         except OSError:
             return None  # unknown: assume the host matches
@@ -321,6 +324,8 @@ class CMUcam4Board:
         # Pace in slices of ~10 ms so the wire timing is right at any scale.
         step = max(1, int(0.01 / bt)) if bt > 0 else len(data)
         for i in range(0, len(data), step):
+            if self._stop.is_set():  # _pace notices only when ahead of real time
+                raise _Gone
             chunk = data[i : i + step]
             self._write(chunk)
             self._pace(len(chunk) * bt)

@@ -147,6 +147,18 @@ def test_sf_abort_with_cr(port) -> None:
     assert ask(port, b"GV\r") == b"ACK\rCMUcam4 v1.02\r:"
 
 
+def test_closed_mid_frame_to_a_host_that_stopped_reading() -> None:
+    # Unpaced, a column is one write, and each waits 0.2 s on a full pty before losing
+    # its bytes: a whole frame would outlast close()'s 5 s join, then meet its closed
+    # pty (an unhandled ValueError in the board's thread, seen in CI).
+    b = CMUcam4Board(time_scale=0.0)
+    with serial.Serial(b.start(), 19200, timeout=1.0) as p:
+        p.write(b"SF 0 0\r")
+        assert p.read(4) == b"ACK\r"  # then read nothing more
+        b.close()
+        assert b._thread is not None and not b._thread.is_alive()
+
+
 def test_stream_and_stop(port) -> None:
     port.write(b"GM\r")
     assert port.read(4) == b"ACK\r"
