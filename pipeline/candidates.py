@@ -38,7 +38,9 @@ CONFIDENT_SUPPORT = 0.9  # a fit this good is not tried from another start
 # up; H-ish blobs of grass or sensor noise stay under 1.4 (measured on the
 # shared real photos and the bench's floors).
 MIN_EVIDENCE = 1.45
-MIN_FRAMED_EVIDENCE = 1.2  # enough with the rest of the pad found around the H (find._check)
+# Enough with the rest of the pad found around the H (find._check): an H of 2 px strokes
+# spanning 15 px reaches only 1.0-1.4 (the bench's paper_ring at 2.4-3.2 m).
+MIN_FRAMED_EVIDENCE = 1.0
 # Evidence an H loses per spread of stroke weight it differs by from the reference's
 # (``pipeline.hfit.h_deformation``): real pads against their pictures differ by up to
 # 1.5 spreads with evidence 1.56 and up; serifed letters I on their side, fitted as H's

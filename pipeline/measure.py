@@ -45,6 +45,9 @@ WIDE_SEARCH_PX = 6.0  # how far the whole pad's edges are first looked for
 SELF_SUFFICIENT_PX = 100.0  # an H this large pins the pose by itself
 MIN_MARKS_FOUND = 0.5  # of the marks' resolvable sides, for the whole pad to count
 MARK_SIDE_PX = 4.0  # a mark's straight side shorter than this (a star's point) is not told
+# The whole pad's fit may move the H's corners this far (or 3 % of its span): an H of
+# 15 px fitted alone is off by up to a pixel and a half (its strokes are 2 px wide).
+MOVED_PX = 1.5
 HEADING_MARGIN = 0.05  # of the marks' edges: one half turn must find this many more
 _HALF_TURN = np.diag([-1.0, -1.0, 1.0])  # pad metres turned about the centre
 
@@ -142,7 +145,7 @@ def whole_pad(
     if fit is None or _marks_found(fit, reference) < MIN_MARKS_FOUND:
         return H
     moved = apply_h(fit.H, reference.corners_m) - apply_h(H, reference.corners_m)
-    if np.max(np.hypot(moved[:, 0], moved[:, 1])) > max(1.0, 0.03 * span):
+    if np.max(np.hypot(moved[:, 0], moved[:, 1])) > max(MOVED_PX, 0.03 * span):
         return H
     return fit.H
 
