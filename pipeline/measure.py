@@ -35,11 +35,19 @@ MAX_TILT_OFF_DEG = 3.0  # a refined pose may lean this far from the attitude's l
 # level is not the pad lying flat (an H of other proportions seen at a slant, or a wrong
 # pose): the hint's error and a sloping pad stay well under it.
 MAX_LEAN_DEG = 12.0
-# The pad's points, placed by its homography, weighed against the attitude: within
-# POINT_SIGMA_PX on a pad over SMALL_PAD_SPAN_PX; on a smaller one the tilt they show
-# shrinks with the square of its span while its blurred edges still bias them (far
-# pads' tilts went 3-7 degrees off a hint 1 degree right).
-POINT_SIGMA_PX, SMALL_PAD_SPAN_PX = 0.3, 50.0
+# The pad's points, placed by its homography, weighed against the attitude. A tilt
+# moves them by about span^2 / fx pixels a radian (its "shown" tilt), while their
+# noise and blurred edges' bias stay a few tenths of a pixel whatever the span: each
+# point is within POINT_SIGMA_PX where the tilt shows by the SHOWN figure below (in
+# px/rad; at 640 px and 60 degrees 4.5 is a pad of 50 px, 18 one of 100 px), and in
+# inverse proportion under it. Whether the pad may lie level is judged against the
+# noise (NOISE_SHOWN); the pose weighs the bias as well (TILT_SHOWN: far pads' tilts
+# went 3-7 degrees off a hint 1 degree right; more weight on the hint than this took
+# the 0.55 m pad at 5-6 m over 1 % of the altitude, a 0.7 degree hint's own error).
+# Under POLISH_SHOWN the pad's edges, fitted without the attitude, do not move a
+# hinted pose.
+POINT_SIGMA_PX = 0.3
+NOISE_SHOWN_PX_PER_RAD, TILT_SHOWN_PX_PER_RAD, POLISH_SHOWN_PX_PER_RAD = 4.5, 18.0, 18.0
 AMBIGUOUS_FIT = 0.8  # two poses whose RMS errors are within this ratio are a tie
 WIDE_SEARCH_PX = 6.0  # how far the whole pad's edges are first looked for
 SELF_SUFFICIENT_PX = 100.0  # an H this large pins the pose by itself
@@ -100,7 +108,9 @@ def measure(
     # homography cannot follow, the pose is refined on the edges.
     polish = whole is not Hv or cam.has_distortion
     Hv, told = _heading(whole, reference, levels)
-    fitted = _fit_pose(reference, levels, cam, Hv, polish=polish, gravity=gravity)
+    fitted = _fit_pose(
+        reference, levels, cam, Hv, polish=polish, gravity=gravity, enlarged=max(view.scale, 1.0)
+    )
     if fitted is None:
         return None
     fit, support, ambiguous = fitted
@@ -192,6 +202,7 @@ def _fit_pose(
     *,
     polish: bool,
     gravity: np.ndarray | None,
+    enlarged: float = 1.0,
 ) -> tuple[EdgeFit, float, bool] | None:
     """The camera's pose over the pad from the located homography, or None.
 
@@ -208,9 +219,10 @@ def _fit_pose(
     a prior. Without it, the better fit wins, or on a tie the one nearer to
     looking straight down (as a hovering multirotor's camera does), and the
     pose is reported ambiguous when the two differ. With the pad's other marks
-    found (``polish``), an unhinted pose then takes a few steps on all the
-    pad's edges with the camera model, whose 6 unknowns noise moves less than
-    the homography's 8; kept when it finds at least as many of the edges.
+    found (``polish``), the pose then takes a few steps on all the pad's edges
+    with the camera model, whose 6 unknowns noise moves less than the
+    homography's 8; kept when it finds at least as many of the edges (and, with
+    the attitude, on a pad large enough to show its tilt, staying level).
     Returns the fit, the share of the whole pad's edges found where the pose
     puts them, and whether it is ambiguous.
     """
@@ -233,7 +245,16 @@ def _fit_pose(
     ambiguous = False
     if gravity is not None:
         _, _, rvec, tvec = min(cands, key=lambda c: tilt_from_level_deg(c[2], gravity))
-        sigma_px = POINT_SIGMA_PX * max(1.0, (SMALL_PAD_SPAN_PX / _span(px)) ** 2)
+        shown = _tilt_shown(px, cam, enlarged)
+        # Whether the pixels, within their noise, let the pad lie level (judged
+        # before the pose trusts them less for their bias, which would level any
+        # look-alike) ...
+        sigma_px = POINT_SIGMA_PX * max(1.0, NOISE_SHOWN_PX_PER_RAD / shown)
+        check, _ = refine_with_gravity(pts_m, px, cam, rvec, tvec, gravity, sigma_px=sigma_px)
+        if tilt_from_level_deg(check, gravity) > MAX_LEAN_DEG:
+            return None
+        # ... and the pose, with their bias as well.
+        sigma_px = POINT_SIGMA_PX * max(1.0, TILT_SHOWN_PX_PER_RAD / shown)
         rvec, tvec = refine_with_gravity(pts_m, px, cam, rvec, tvec, gravity, sigma_px=sigma_px)
         fit = EdgeFit(rvec, tvec, _rms(pts_m, px, cam, rvec, tvec), len(pts_m), 0)
     else:
@@ -242,7 +263,7 @@ def _fit_pose(
         ambiguous = len(cands) > 1 and _tie(cands[0], cands[1]) and _apart(cands[0], cands[1])
         fit = EdgeFit(rvec, tvec, rms, len(pts_m), 0)
     support = edge_support(levels, reference.edge_model, cam, fit.rvec, fit.tvec)
-    if polish:
+    if polish and (gravity is None or _tilt_shown(px, cam, enlarged) >= POLISH_SHOWN_PX_PER_RAD):
         refined = fit_edges(levels, reference.edge_model, cam, fit.rvec, fit.tvec, search_px=1.5)
         level = refined is not None and (
             gravity is None or tilt_from_level_deg(refined.rvec, gravity) < MAX_TILT_OFF_DEG
@@ -258,6 +279,12 @@ def _fit_pose(
 
 def _span(px: np.ndarray) -> float:
     return max(float(np.ptp(px, axis=0).max()), 1.0)
+
+
+def _tilt_shown(px: np.ndarray, cam: Camera, enlarged: float) -> float:
+    """About how many of the frame's own pixels the pad's points move for a radian
+    of its tilt (a view ``enlarged`` by interpolation shows no more than the frame)."""
+    return _span(px) ** 2 / (cam.fx * enlarged)
 
 
 def _rms(pts_m: np.ndarray, px: np.ndarray, cam: Camera, rvec, tvec) -> float:
