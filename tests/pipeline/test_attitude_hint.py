@@ -9,13 +9,10 @@ import numpy as np
 import pytest
 
 from pipeline import Camera, Reference, process_frame
-from pipeline.bench.frames import SCENE_EVERY, make_scenes, make_view
-from pipeline.bench.hint import gravity_hint
-from pipeline.bench.tally import Tally as BenchTally
 from pipeline.pose import TURN, pad_normal_in_camera, pose_to_vectors
-from pipeline.render import camera_rotation, get_design, make_pad_image, make_scene, render
-from pipeline.render.view import render_view
+from pipeline.render import camera_rotation, make_pad_image, make_scene, render
 from pipeline.result import Pose
+from tests.pipeline.bench_support import score_bench_frames
 
 CAM = Camera.from_fov(640, 480, 60.0)
 
@@ -101,15 +98,6 @@ def test_a_far_small_pad_leans_as_the_attitude_says_not_as_its_blurred_edges_do(
     # placed by a homography of blurred edges, showed a tilt 4-7 degrees off a hint
     # 1 degree right, and the pose followed them (4.1-6.9 degrees and 7.3-11.9 % of
     # the altitude off; now 1.6-3.9 degrees and 2.8-6.8 %).
-    design = get_design("red_on_black")
-    ref = Reference.from_image(design.draw().image, design.size_m)
-    tally = BenchTally()
-    for i in (48, 61, 76, 97, 98):
-        scenes = make_scenes(design, [0, i // SCENE_EVERY], "today", ())
-        view, noise_seed = make_view([0, i, 7], CAM, design, "today")
-        frame = render_view(scenes.pad, CAM, view, np.random.default_rng(noise_seed))
-        g = gravity_hint(view.R_pad_cam, [0, i, 11])
-        res = process_frame(frame, ref, CAM, gravity_hint=g)
-        tally.score(res.detected and res.pose is not None, res.pose, view, design.symmetric)
+    tally = score_bench_frames("red_on_black", (48, 61, 76, 97, 98))
     assert tally.detected == 5
     assert max(tally.rot_deg) < 4.0 and max(tally.pos_pct) < 7.0, (tally.rot_deg, tally.pos_pct)

@@ -18,13 +18,13 @@ import pytest
 from pipeline import Camera, Reference, process_frame
 from pipeline.bench.frames import SCENE_EVERY, make_scenes, make_view
 from pipeline.bench.hint import gravity_hint
-from pipeline.bench.tally import Tally as BenchTally
 from pipeline.find import MIN_PAD_NCC, Tally
 from pipeline.measure import pad_box_m
 from pipeline.preprocess import smooth_channel
 from pipeline.render import camera_rotation, get_design, make_pad_image, make_scene, render
 from pipeline.render.view import render_view
 from pipeline.template import pad_pattern
+from tests.pipeline.bench_support import score_bench_frames
 
 CAM = Camera.from_fov(640, 480, 60.0)
 WIDE = Camera.from_fov(1280, 720, 60.0)
@@ -148,15 +148,6 @@ def test_an_h_of_2_px_strokes_spanning_15_px_counts_with_its_ring_found_around_i
     # The bench's paper_ring (a 7 cm H of 1 cm strokes in a ring on a sheet of paper)
     # at 2.4-3.2 m: the H alone is too thin for its own evidence, its ring is found,
     # and the ring's fit moves the H by up to 1.5 px. Each of these five was missed.
-    design = get_design("paper_ring")
-    ref = Reference.from_image(design.draw().image, design.size_m)
-    tally = BenchTally()
-    for i in (3, 12, 71, 92, 97):
-        scenes = make_scenes(design, [0, i // SCENE_EVERY], "today", ())
-        view, noise_seed = make_view([0, i, 7], CAM, design, "today")
-        frame = render_view(scenes.pad, CAM, view, np.random.default_rng(noise_seed))
-        g = gravity_hint(view.R_pad_cam, [0, i, 11])
-        res = process_frame(frame, ref, CAM, gravity_hint=g)
-        tally.score(res.detected and res.pose is not None, res.pose, view, design.symmetric)
+    tally = score_bench_frames("paper_ring", (3, 12, 71, 92, 97))
     assert tally.detected == 5
     assert max(tally.pos_pct) < 2.0 and max(tally.rot_deg) < 1.0

@@ -1,0 +1,31 @@
+"""The bench's own frames in tests: a design's frames as `pipeline.bench --design NAME
+--hint` renders and scores them (seed 0, today's mix, 640 x 480 at 60 degrees)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pipeline import Camera, Reference, process_frame
+from pipeline.bench.frames import SCENE_EVERY, make_scenes, make_view
+from pipeline.bench.hint import gravity_hint
+from pipeline.bench.tally import Tally
+from pipeline.render import get_design
+from pipeline.render.view import render_view
+
+CAM = Camera.from_fov(640, 480, 60.0)
+
+
+def score_bench_frames(design_name: str, frames: tuple[int, ...]) -> Tally:
+    """The bench's frames ``frames`` of ``design_name``, run with the attitude hint
+    and scored as the bench scores them."""
+    design = get_design(design_name)
+    reference = Reference.from_image(design.draw().image, design.size_m)
+    tally = Tally()
+    for i in frames:
+        scenes = make_scenes(design, [0, i // SCENE_EVERY], "today", ())
+        view, noise_seed = make_view([0, i, 7], CAM, design, "today")
+        frame = render_view(scenes.pad, CAM, view, np.random.default_rng(noise_seed))
+        g = gravity_hint(view.R_pad_cam, [0, i, 11])
+        res = process_frame(frame, reference, CAM, gravity_hint=g)
+        tally.score(res.detected and res.pose is not None, res.pose, view, design.symmetric)
+    return tally
