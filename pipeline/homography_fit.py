@@ -81,6 +81,7 @@ def fit_homography(
     search_px: float = 2.5,
     sides_alike: bool = True,
     deform: Deformation | None = None,
+    min_clearance_px: float = MIN_CLEARANCE_PX,
 ) -> HomographyFit | None:
     """Refine ``H0`` so that the model's sides lie on the edges of ``image``.
 
@@ -96,6 +97,8 @@ def fit_homography(
         the H alone, whose stroke ends pin its height), or every sample alike.
     deform : ways the model may differ from what is in view (the H's strokes
         wider or narrower than the reference's), fitted with the homography.
+    min_clearance_px : sides closer than this to a side alongside them are not
+        fitted (their edges blur into one).
 
     Returns
     -------
@@ -153,7 +156,7 @@ def fit_homography(
         iterations,
         float(search_px),
         sides_alike,
-        MIN_CLEARANCE_PX,
+        float(min_clearance_px),
         MIN_SIDE_PX,
         DAMPING,
         MIN_DROP,

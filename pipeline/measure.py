@@ -16,7 +16,7 @@ import numpy as np
 
 from pipeline.camera import Camera
 from pipeline.edgefit import EdgeFit, edge_support, fit_edges
-from pipeline.homography_fit import HomographyFit, apply_h, fit_homography
+from pipeline.homography_fit import MIN_CLEARANCE_PX, HomographyFit, apply_h, fit_homography
 from pipeline.homography_fit import support as edge_share
 from pipeline.pose import (
     ippe_candidates,
@@ -52,6 +52,11 @@ AMBIGUOUS_FIT = 0.8  # two poses whose RMS errors are within this ratio are a ti
 WIDE_SEARCH_PX = 6.0  # how far the whole pad's edges are first looked for
 SELF_SUFFICIENT_PX = 100.0  # an H this large pins the pose by itself
 MIN_MARKS_FOUND = 0.5  # of the marks' resolvable sides, for the whole pad to count
+# A mark's stroke this thin (its two sides this many px apart) may be one blurred line
+# in a frame: the whole pad is fitted again without such strokes when too few of its
+# marks are found with them (a printed ring of 1.4 px left 60 % of the marks unfound,
+# and the pose to the H alone).
+BLURRED_STROKE_PX = 2.0
 MARK_SIDE_PX = 4.0  # a mark's straight side shorter than this (a star's point) is not told
 # The whole pad's fit may move the H's corners this far (or 3 % of its span): an H of
 # 15 px fitted alone is off by up to a pixel and a half (its strokes are 2 px wide).
@@ -149,15 +154,41 @@ def whole_pad(
     span = float(np.ptp(apply_h(H, reference.corners_m), axis=0).max())
     if model is None or (span > SELF_SUFFICIENT_PX and not any_size):
         return H
-    fit = fit_homography(
-        levels, reference.edge_model, H, iterations=3, search_px=WIDE_SEARCH_PX, sides_alike=False
-    )
+    fit = _fit_whole_pad(levels, reference, H, MIN_CLEARANCE_PX)
+    if (fit is None or _marks_found(fit, reference) < MIN_MARKS_FOUND) and _thin_strokes(
+        H, reference
+    ):
+        fit = _fit_whole_pad(levels, reference, H, BLURRED_STROKE_PX)
     if fit is None or _marks_found(fit, reference) < MIN_MARKS_FOUND:
         return H
     moved = apply_h(fit.H, reference.corners_m) - apply_h(H, reference.corners_m)
     if np.max(np.hypot(moved[:, 0], moved[:, 1])) > max(MOVED_PX, 0.03 * span):
         return H
     return fit.H
+
+
+def _fit_whole_pad(
+    levels: np.ndarray, reference: Reference, H: np.ndarray, min_clearance_px: float
+) -> HomographyFit | None:
+    return fit_homography(
+        levels,
+        reference.edge_model,
+        H,
+        iterations=3,
+        search_px=WIDE_SEARCH_PX,
+        sides_alike=False,
+        min_clearance_px=min_clearance_px,
+    )
+
+
+def _thin_strokes(H: np.ndarray, reference: Reference) -> bool:
+    """Whether some of the pad's sides lie between ``MIN_CLEARANCE_PX`` and
+    ``BLURRED_STROKE_PX`` from a side alongside them, where ``H`` puts them."""
+    model = reference.edge_model
+    a, b = apply_h(H, model.a_m), apply_h(H, model.b_m)
+    scale = np.hypot(*(b - a).T) / np.maximum(np.hypot(*(model.b_m - model.a_m).T), 1e-12)
+    clearance = model.clearance_m * scale
+    return bool(np.any((clearance >= MIN_CLEARANCE_PX) & (clearance < BLURRED_STROKE_PX)))
 
 
 def _marks_found(fit: HomographyFit, reference: Reference) -> float:
