@@ -111,10 +111,21 @@ def measure(
     whole = whole_pad(Hv, reference, levels)
     # With the pad's other marks found, or a lens whose distortion the
     # homography cannot follow, the pose is refined on the edges.
-    polish = whole is not Hv or cam.has_distortion
+    marks_found = whole is not Hv
+    polish = marks_found or cam.has_distortion
     Hv, told = _heading(whole, reference, levels)
+    # The marks' points are measured only where the marks were found: placed by the
+    # H's homography alone they add no evidence, only a count that outweighs the attitude.
+    points_m = reference.pose_points_m if marks_found else reference.corners_m
     fitted = _fit_pose(
-        reference, levels, cam, Hv, polish=polish, gravity=gravity, enlarged=max(view.scale, 1.0)
+        reference,
+        levels,
+        cam,
+        Hv,
+        points_m,
+        polish=polish,
+        gravity=gravity,
+        enlarged=max(view.scale, 1.0),
     )
     if fitted is None:
         return None
@@ -230,6 +241,7 @@ def _fit_pose(
     levels: np.ndarray,
     cam: Camera,
     H: np.ndarray,
+    pts_m: np.ndarray,
     *,
     polish: bool,
     gravity: np.ndarray | None,
@@ -238,9 +250,10 @@ def _fit_pose(
     """The camera's pose over the pad from the located homography, or None.
 
     The homography already holds every edge of the pad that was found; the
-    pose is the rigid motion that maps the pad's points (the H's corners and
-    the marks' vertices) where it does: IPPE's two candidates, each taken a
-    few Levenberg-Marquardt steps on all the points (IPPE works from the
+    pose is the rigid motion that maps the pad's points ``pts_m`` (the H's
+    corners, and the marks' vertices when the marks were found) where it
+    does: IPPE's two candidates, each taken a few Levenberg-Marquardt steps on
+    all the points (IPPE works from the
     homography's local Jacobian; the steps take a tenth of a pixel off, a few
     percent of range on a small pad).
 
@@ -257,7 +270,6 @@ def _fit_pose(
     Returns the fit, the share of the whole pad's edges found where the pose
     puts them, and whether it is ambiguous.
     """
-    pts_m = reference.pose_points_m
     px = apply_h(H, pts_m)
     obj = np.column_stack([pts_m, np.zeros(len(pts_m))])
     cands = []
@@ -274,17 +286,21 @@ def _fit_pose(
     if not cands:
         return None
     ambiguous = False
+    # How far the homography shows the pad's tilt: over the whole pad it places.
+    all_m = reference.pose_points_m
+    all_px = apply_h(H, all_m)
+    shown = _tilt_shown(all_px, cam, enlarged)
     if gravity is not None:
         _, _, rvec, tvec = min(cands, key=lambda c: tilt_from_level_deg(c[2], gravity))
-        shown = _tilt_shown(px, cam, enlarged)
         # Whether the pixels, within their noise, let the pad lie level (judged
         # before the pose trusts them less for their bias, which would level any
-        # look-alike) ...
+        # look-alike; on all the pad's points) ...
         sigma_px = POINT_SIGMA_PX * max(1.0, NOISE_SHOWN_PX_PER_RAD / shown)
-        check, _ = refine_with_gravity(pts_m, px, cam, rvec, tvec, gravity, sigma_px=sigma_px)
+        check, _ = refine_with_gravity(all_m, all_px, cam, rvec, tvec, gravity, sigma_px=sigma_px)
         if tilt_from_level_deg(check, gravity) > MAX_LEAN_DEG:
             return None
-        # ... and the pose, with their bias as well.
+        # ... and the pose, with their bias as well (on ``pts_m``: points the
+        # homography placed but no edge measured do not outweigh the attitude).
         sigma_px = POINT_SIGMA_PX * max(1.0, TILT_SHOWN_PX_PER_RAD / shown)
         rvec, tvec = refine_with_gravity(pts_m, px, cam, rvec, tvec, gravity, sigma_px=sigma_px)
         fit = EdgeFit(rvec, tvec, _rms(pts_m, px, cam, rvec, tvec), len(pts_m), 0)
@@ -294,7 +310,7 @@ def _fit_pose(
         ambiguous = len(cands) > 1 and _tie(cands[0], cands[1]) and _apart(cands[0], cands[1])
         fit = EdgeFit(rvec, tvec, rms, len(pts_m), 0)
     support = edge_support(levels, reference.edge_model, cam, fit.rvec, fit.tvec)
-    if polish and (gravity is None or _tilt_shown(px, cam, enlarged) >= POLISH_SHOWN_PX_PER_RAD):
+    if polish and (gravity is None or shown >= POLISH_SHOWN_PX_PER_RAD):
         refined = fit_edges(levels, reference.edge_model, cam, fit.rvec, fit.tvec, search_px=1.5)
         level = refined is not None and (
             gravity is None or tilt_from_level_deg(refined.rvec, gravity) < MAX_TILT_OFF_DEG

@@ -1,5 +1,5 @@
 """The bench's own frames in tests: a design's frames as `pipeline.bench --design NAME
---hint` renders and scores them (seed 0, today's mix, 640 x 480 at 60 degrees)."""
+--hint [--degrade LEVEL]` renders and scores them (seed 0, 640 x 480 at 60 degrees)."""
 
 from __future__ import annotations
 
@@ -15,15 +15,15 @@ from pipeline.render.view import render_view
 CAM = Camera.from_fov(640, 480, 60.0)
 
 
-def score_bench_frames(design_name: str, frames: tuple[int, ...]) -> Tally:
-    """The bench's frames ``frames`` of ``design_name``, run with the attitude hint
-    and scored as the bench scores them."""
+def score_bench_frames(design_name: str, frames: tuple[int, ...], level: str = "today") -> Tally:
+    """The bench's frames ``frames`` of ``design_name`` at degradation ``level``, run
+    with the attitude hint and scored as the bench scores them."""
     design = get_design(design_name)
     reference = Reference.from_image(design.draw().image, design.size_m)
     tally = Tally()
     for i in frames:
-        scenes = make_scenes(design, [0, i // SCENE_EVERY], "today", ())
-        view, noise_seed = make_view([0, i, 7], CAM, design, "today")
+        scenes = make_scenes(design, [0, i // SCENE_EVERY], level, ())
+        view, noise_seed = make_view([0, i, 7], CAM, design, level)
         frame = render_view(scenes.pad, CAM, view, np.random.default_rng(noise_seed))
         g = gravity_hint(view.R_pad_cam, [0, i, 11])
         res = process_frame(frame, reference, CAM, gravity_hint=g)
