@@ -35,6 +35,9 @@ export interface InvariantSample {
   orientationDeg: number | null;
 }
 
+/** How long after a reboot is asked for a link loss is taken for it (ms). */
+const REBOOT_GRACE_MS = 30000;
+
 export interface StoreOptions {
   historySize?: number;
   eventsSize?: number;
@@ -57,8 +60,8 @@ export class Store {
   readonly frameRate = new RateMeter();
   /** The vehicle's BATT_* thresholds (GET /api/params/battery), for the alerts. */
   thresholds: BatteryThresholds | null = null;
-  /** Until when (Date.now() ms) a link loss is the reboot the operator asked for. */
-  rebootingUntil = 0;
+  /** Until when (``now()`` ms) a link loss is the reboot the operator asked for. */
+  private rebootingUntil = 0;
   /** performance.now() when the first state from the server was applied (first paint). */
   firstStateAt: number | null = null;
   /** The last heartbeat age the server reported, and when it changed here (ms). */
@@ -215,6 +218,26 @@ export class Store {
       orientationDeg: typeof r.orientation_deg === "number" ? r.orientation_deg : null,
     });
     this.emit("frame");
+  }
+
+  /** Whether a link loss now is the reboot the operator asked for. */
+  isRebooting(): boolean {
+    return this.rebootingUntil > this.now();
+  }
+
+  /** Sends a command that reboots the autopilot: the link drops as soon as the
+   * vehicle accepts it, before the answer comes, so the drop counts as the asked-for
+   * reboot from the start, and no longer once the command failed or was refused. */
+  async whileRebooting<T extends { ok: boolean }>(send: () => Promise<T>): Promise<T> {
+    this.rebootingUntil = this.now() + REBOOT_GRACE_MS;
+    try {
+      const r = await send();
+      if (!r.ok) this.rebootingUntil = 0;
+      return r;
+    } catch (error) {
+      this.rebootingUntil = 0;
+      throw error;
+    }
   }
 
   private emit(topic: Topic): void {

@@ -53,7 +53,7 @@ export function mountAlertBanner(root: HTMLElement, ctx: Ctx): AlarmState {
     const v = readTelemetry(store.telemetry);
     if (v.linkState !== "up") ekfWasHealthy = false;
     else if (v.ekfHealthy) ekfWasHealthy = true;
-    const rebooting = store.rebootingUntil > Date.now();
+    const rebooting = store.isRebooting();
     wasOpen = wasOpen || store.connection === "open";
     const m = store.status?.mission ?? null;
     const missionKey = m ? `${m.run_id}:${m.outcome}` : null;

@@ -34,14 +34,10 @@ export async function setupExtnav(ctx: Ctx): Promise<{ ok: boolean; text: string
     confirmLabel: "Write and reboot",
   });
   if (!yes) return null;
-  // The link drops as soon as the vehicle accepts the reboot, before this answer comes.
-  ctx.store.rebootingUntil = Date.now() + 30000;
   try {
-    const r: ExtNavSetup = await ctx.api.extnavSetup();
-    if (!r.ok) ctx.store.rebootingUntil = 0;
+    const r: ExtNavSetup = await ctx.store.whileRebooting(() => ctx.api.extnavSetup());
     return { ok: r.ok, text: r.detail };
   } catch (error) {
-    ctx.store.rebootingUntil = 0;
     if (!(error instanceof ApiError)) throw error;
     if (error.status === 401) document.dispatchEvent(new CustomEvent("visland:need-token"));
     const body = error.body as Partial<ExtNavSetup> | null;

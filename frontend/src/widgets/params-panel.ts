@@ -146,16 +146,7 @@ export function mountParamsPanel(root: HTMLElement, ctx: Ctx): { load(): void } 
       danger: true,
     });
     if (!yes) return;
-    // The link drops as soon as the vehicle accepts, before this answer comes.
-    ctx.store.rebootingUntil = Date.now() + 30000;
-    let r: CommandOutcome;
-    try {
-      r = await api.reboot();
-    } catch (error) {
-      ctx.store.rebootingUntil = 0;
-      throw error;
-    }
-    if (!r.ok) ctx.store.rebootingUntil = 0;
+    const r: CommandOutcome = await ctx.store.whileRebooting(() => api.reboot());
     say(r.ok, r.ok ? "Reboot sent: the autopilot is restarting." : sentence("Reboot not done", r.message));
     if (r.status === 401) document.dispatchEvent(new CustomEvent("visland:need-token"));
   });

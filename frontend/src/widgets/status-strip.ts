@@ -88,7 +88,7 @@ export function mountStatusStrip(root: HTMLElement, ctx: Ctx): StripHandles {
     const v = readTelemetry(store.telemetry);
     const open = store.connection === "open";
     const linkState = !open ? "server" : store.telemetry ? v.linkState : (store.status?.link.state ?? "unknown");
-    const rebooting = store.rebootingUntil > Date.now() && linkState !== "up";
+    const rebooting = store.isRebooting() && linkState !== "up";
     setText(
       link.value,
       rebooting

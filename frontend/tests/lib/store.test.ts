@@ -193,3 +193,33 @@ describe("Store", () => {
     expect(store.heartbeatAgeS()).toBeNull();
   });
 });
+
+describe("a command that reboots the autopilot", () => {
+  it("counts a link loss as the asked-for reboot from the send, for 30 s, unless refused or failed", async () => {
+    let t = 1_000_000;
+    const store = new Store({ now: () => t });
+    expect(store.isRebooting()).toBe(false);
+
+    let seenDuringSend = false;
+    const accepted = await store.whileRebooting(async () => {
+      seenDuringSend = store.isRebooting(); // the link may drop before the answer comes
+      return { ok: true };
+    });
+    expect(accepted.ok).toBe(true);
+    expect(seenDuringSend).toBe(true);
+    t += 29_000;
+    expect(store.isRebooting()).toBe(true);
+    t += 2_000;
+    expect(store.isRebooting()).toBe(false);
+
+    await store.whileRebooting(async () => ({ ok: false, message: "armed" }));
+    expect(store.isRebooting()).toBe(false);
+
+    await expect(
+      store.whileRebooting(async () => {
+        throw new Error("network");
+      }),
+    ).rejects.toThrow("network");
+    expect(store.isRebooting()).toBe(false);
+  });
+});
