@@ -253,9 +253,8 @@ def _fit_pose(
     pose is the rigid motion that maps the pad's points ``pts_m`` (the H's
     corners, and the marks' vertices when the marks were found) where it
     does: IPPE's two candidates, each taken a few Levenberg-Marquardt steps on
-    all the points (IPPE works from the
-    homography's local Jacobian; the steps take a tenth of a pixel off, a few
-    percent of range on a small pad).
+    all the points (IPPE works from the homography's local Jacobian; the steps
+    take a tenth of a pixel off, a few percent of range on a small pad).
 
     A small pad seen nearly head on fits the two almost equally, tilted
     either way. With the camera's attitude (``gravity``: down in the camera
