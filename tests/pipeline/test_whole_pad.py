@@ -1,5 +1,5 @@
-"""The whole pad's fit (``pipeline.measure.whole_pad``) around an H whose marks' strokes
-are about as thin as the frame's blur."""
+"""The whole pad's marks in the pose (``pipeline.measure``): fitted around an H whose
+marks' strokes are about as thin as the frame's blur, and left out where not found."""
 
 from tests.pipeline.bench_support import score_bench_frames
 
