@@ -232,16 +232,18 @@ def peer(make_peer: Callable[..., MavPeer]) -> MavPeer:
 
 @pytest.fixture
 def make_link(tmp_path: Any) -> Iterator[Callable[..., VehicleLink]]:
-    """Build started links that are always closed, with fast timeouts for tests."""
+    """Build links (started unless ``start=False``: to subscribe before its first
+    event) that are always closed, with fast timeouts for tests."""
     links: list[VehicleLink] = []
 
-    def make(url: str, **kwargs: Any) -> VehicleLink:
+    def make(url: str, *, start: bool = True, **kwargs: Any) -> VehicleLink:
         kwargs.setdefault("tlog_dir", tmp_path / "tlogs")
         kwargs.setdefault("heartbeat_timeout_s", 1.0)
         kwargs.setdefault("command_timeout_s", 1.0)
         link = VehicleLink(url, **kwargs)
         links.append(link)
-        link.start()
+        if start:
+            link.start()
         return link
 
     yield make

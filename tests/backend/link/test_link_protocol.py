@@ -212,8 +212,9 @@ def test_an_accepted_reboot_takes_the_link_down_at_once(peer: Any, make_link) ->
 def test_heartbeats_of_the_boot_being_left_do_not_bring_the_link_back(peer: Any, make_link) -> None:
     # ArduPilot answers the reboot and restarts a moment later: its last heartbeats
     # must not say the link is up again while the vehicle goes away.
-    link = make_link(f"tcp:127.0.0.1:{peer.port}", heartbeat_timeout_s=30.0)
-    seen = _events(link)
+    link = make_link(f"tcp:127.0.0.1:{peer.port}", heartbeat_timeout_s=30.0, start=False)
+    seen = _events(link)  # before it starts (a loaded machine may connect it at once)
+    link.start()
     assert _wait_event(seen, "link_up", 20.0) is not None  # connected
     seen.clear()
     asked = time.monotonic()
