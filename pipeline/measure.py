@@ -57,6 +57,7 @@ MIN_MARKS_FOUND = 0.5  # of the marks' resolvable sides, for the whole pad to co
 # marks are found with them (a printed ring of 1.4 px left 60 % of the marks unfound,
 # and the pose to the H alone).
 BLURRED_STROKE_PX = 2.0
+AFFINE_GAIN = 0.25  # more of the marks found from the H's affine part, for it to be kept
 MARK_SIDE_PX = 4.0  # a mark's straight side shorter than this (a star's point) is not told
 # The whole pad's fit may move the H's corners this far (or 3 % of its span): an H of
 # 15 px fitted alone is off by up to a pixel and a half (its strokes are 2 px wide).
@@ -165,17 +166,52 @@ def whole_pad(
     span = float(np.ptp(apply_h(H, reference.corners_m), axis=0).max())
     if model is None or (span > SELF_SUFFICIENT_PX and not any_size):
         return H
-    fit = _fit_whole_pad(levels, reference, H, MIN_CLEARANCE_PX)
-    if (fit is None or _marks_found(fit, reference) < MIN_MARKS_FOUND) and _thin_strokes(
-        H, reference
-    ):
-        fit = _fit_whole_pad(levels, reference, H, BLURRED_STROKE_PX)
-    if fit is None or _marks_found(fit, reference) < MIN_MARKS_FOUND:
-        return H
-    moved = apply_h(fit.H, reference.corners_m) - apply_h(H, reference.corners_m)
-    if np.max(np.hypot(moved[:, 0], moved[:, 1])) > max(MOVED_PX, 0.03 * span):
-        return H
-    return fit.H
+    fit, found = _marks_fit(levels, reference, H)
+    if fit is not None and found >= MIN_MARKS_FOUND and _in_place(fit.H, H, reference, span):
+        return fit.H
+    # The perspective of a small H's homography is mostly its noise, which the marks'
+    # distance amplifies (a sheet four times its H's size, the H 13-17 px: its corners
+    # placed up to 10 px off, beyond where their edges are looked for). From the
+    # homography's affine part the marks are looked for again; kept when clearly more
+    # of them are found (a blur hides them from both starts alike).
+    affine = _affine_part(H, reference.corners_m.mean(axis=0))
+    fit_a, found_a = _marks_fit(levels, reference, affine)
+    more = found_a >= max(MIN_MARKS_FOUND, found + AFFINE_GAIN)
+    if fit_a is not None and more and _in_place(fit_a.H, H, reference, span):
+        return fit_a.H
+    return H
+
+
+def _marks_fit(
+    levels: np.ndarray, reference: Reference, start: np.ndarray
+) -> tuple[HomographyFit | None, float]:
+    """The whole pad fitted from ``start`` and the share of its marks found (0 when
+    the fit failed); fitted again without the strokes a blur may have merged when
+    too few were found with them."""
+    fit = _fit_whole_pad(levels, reference, start, MIN_CLEARANCE_PX)
+    found = 0.0 if fit is None else _marks_found(fit, reference)
+    if found < MIN_MARKS_FOUND and _thin_strokes(start, reference):
+        thin = _fit_whole_pad(levels, reference, start, BLURRED_STROKE_PX)
+        if thin is not None:
+            fit, found = thin, _marks_found(thin, reference)
+    return fit, found
+
+
+def _in_place(fitted: np.ndarray, H: np.ndarray, reference: Reference, span: float) -> bool:
+    """Whether the whole pad's fit still puts the H's corners where ``H`` did."""
+    moved = apply_h(fitted, reference.corners_m) - apply_h(H, reference.corners_m)
+    return bool(np.max(np.hypot(moved[:, 0], moved[:, 1])) <= max(MOVED_PX, 0.03 * span))
+
+
+def _affine_part(H: np.ndarray, centre_m: np.ndarray) -> np.ndarray:
+    """The affine map that agrees with ``H`` at ``centre_m`` to first order."""
+    x = np.asarray(centre_m, np.float64)
+    w = float(H[2, :2] @ x + H[2, 2])
+    at = (H[:2, :2] @ x + H[:2, 2]) / w
+    J = (H[:2, :2] - np.outer(at, H[2, :2])) / w
+    A = np.eye(3)
+    A[:2, :2], A[:2, 2] = J, at - J @ x
+    return A
 
 
 def _fit_whole_pad(

@@ -1,5 +1,6 @@
 """The whole pad's marks in the pose (``pipeline.measure``): fitted around an H whose
-marks' strokes are about as thin as the frame's blur, and left out where not found."""
+marks' strokes are about as thin as the frame's blur or whose own perspective is
+mostly noise, and left out where not found."""
 
 from tests.pipeline.bench_support import score_bench_frames
 
@@ -33,3 +34,14 @@ def test_a_pad_whose_marks_were_not_found_is_posed_on_its_h_not_on_marks_placed_
             tally.rot_deg,
             tally.pos_pct,
         )
+
+
+def test_a_small_h_whose_perspective_misplaces_its_sheet_still_finds_the_sheet():
+    # The bench's paper_ring at 2.5-3.2 m: an H of 14-17 px on a sheet four times its
+    # size. The perspective of the H's own homography, mostly its noise, put the
+    # sheet's corners up to 10 px off, beyond where its edges are looked for; the
+    # marks were not found and the H, too small to count alone, was refused. From
+    # the homography's affine part at the H's centre the sheet is found.
+    tally = score_bench_frames("paper_ring", (16, 61, 96))
+    assert tally.detected == 3
+    assert max(tally.rot_deg) < 2.0 and max(tally.pos_pct) < 3.0, (tally.rot_deg, tally.pos_pct)
