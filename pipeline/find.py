@@ -33,7 +33,7 @@ from pipeline.measure import pad_box_m, whole_pad
 from pipeline.preprocess import Binarized, binarize_channel, to_channel
 from pipeline.reference import Reference
 from pipeline.shapes import Region, regions
-from pipeline.strokes import MAX_DIP, deepest_dip, stroke_samples
+from pipeline.strokes import cut_through, stroke_samples
 from pipeline.template import compare, pad_pattern
 
 MIN_TEMPLATE_NCC = 0.4  # with the reference picture around the H
@@ -280,7 +280,7 @@ def _check(
     if abs(seen.board - seen.reference_board) > tolerance or seen.hue > MAX_HUE:
         return "unframed"
     samples = stroke_samples(reference.corners_m, hit.fit.H, reference.is_paint)
-    if deepest_dip(image, reference.projection.weights, samples) > MAX_DIP:
+    if cut_through(image, reference.projection.weights, samples):
         return "broken"
     return ""
 
