@@ -299,11 +299,11 @@ def _fit_pose(
     a prior, leaning no further from level than ``MAX_TILT_OFF_DEG``. Without
     it, the better fit wins, or on a tie the one nearer to looking straight
     down (as a hovering multirotor's camera does), and the pose is reported
-    ambiguous when the two differ. With the pad's other marks
-    found (``polish``), the pose then takes a few steps on all the pad's edges
-    with the camera model, whose 6 unknowns noise moves less than the
-    homography's 8; kept when it finds at least as many of the edges (and, with
-    the attitude, on a pad large enough to show its tilt, staying level).
+    ambiguous when the two differ. With the pad's other marks found
+    (``polish``), the pose then takes a few steps on all the pad's edges with
+    the camera model, whose 6 unknowns noise moves less than the homography's
+    8; kept when it finds at least as many of the edges (and, with the
+    attitude, on a pad large enough to show its tilt, staying level).
     Returns the fit, the share of the whole pad's edges found where the pose
     puts them, and whether it is ambiguous.
     """
