@@ -8,8 +8,10 @@ nothing, the whole frame at a working width of ``SEARCH_WIDTH_PX``, and last at
 ``FAR_SEARCH_WIDTH_PX`` or the frame's own resolution if finer (a far pad is too
 small at the working width). Whatever finds the H (``pipeline.find``), the pad is
 then measured at the frame's own resolution around it, or on the enlarged view
-that found it (``pipeline.measure``). The result says which way found it
-(``found_by``: "follow", "track" or "search").
+that found it (``pipeline.measure``). When no H is found, a pad too far for its H
+to be placed is looked for by its board (``pipeline.board_search``) on the finest
+view. The result says which way found it (``found_by``: "follow", "track",
+"search" or "board").
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from collections.abc import Iterator
 import cv2
 import numpy as np
 
+from pipeline.board_search import MIN_BOARD_SUPPORT, find_boards
 from pipeline.camera import Camera
 from pipeline.candidates import fit_h_sides
 from pipeline.find import CandidateVerifier, Stages, Tally, search
@@ -147,7 +150,9 @@ def process_frame(
     # A far pad: too small at the search's width, searched at the camera's own
     # resolution before giving up (native frames buy range), and a small frame
     # enlarged: a leg of 2-3 px keeps its shape and corners when interpolated.
-    tries.append(("search", View.enlarged(image.shape, FAR_SEARCH_WIDTH_PX), method))
+    far = View.enlarged(image.shape, FAR_SEARCH_WIDTH_PX)
+    tries.append(("search", far, method))
+    far_binary: Binarized | None = None
     for way, view, how in _with_closer_looks(tries, tally, image.shape, reference):
         if view is None:
             continue
@@ -165,6 +170,8 @@ def process_frame(
             enlarged=max(1.0, view.scale),
         )
         mask = _mask_for(binary.mask, view, search_view)
+        if view is far:
+            far_binary = binary
         for hit in hits:
             measured = measure(
                 image,
@@ -179,6 +186,19 @@ def process_frame(
                 continue
             contour = apply_h(to_frame, hit.candidate.region.contour.astype(np.float64))
             return _detected(measured, reference, contour, yaw_hint, way, mask, stages, t_start)
+    # Last, a pad too far for its H to be placed, by its board on the finest view.
+    if far_binary is not None:
+        to_frame = np.linalg.inv(far.matrix)
+        for H in find_boards(far_binary, reference, max(1.0, far.scale)):
+            measured = measure(
+                image, reference, cam, to_frame @ H, gravity=gravity, found=(far, far_binary.levels)
+            )
+            stages.lap("board")
+            if measured is not None and measured.support >= MIN_BOARD_SUPPORT:
+                outline = apply_h(measured.H, reference.corners_m)
+                way = "board"
+                return _detected(measured, reference, outline, yaw_hint, way, mask, stages, t_start)
+        stages.lap("board")
     return _nothing(stages.timings, t_start, tally.reason(), mask)
 
 

@@ -72,6 +72,17 @@ def apply_h(H: np.ndarray, pts: np.ndarray) -> np.ndarray:
     return q / w[:, None]
 
 
+def affine_part(H: np.ndarray, centre_m: np.ndarray) -> np.ndarray:
+    """The affine map that agrees with ``H`` at ``centre_m`` to first order."""
+    x = np.asarray(centre_m, np.float64)
+    w = float(H[2, :2] @ x + H[2, 2])
+    at = (H[:2, :2] @ x + H[:2, 2]) / w
+    J = (H[:2, :2] - np.outer(at, H[2, :2])) / w
+    A = np.eye(3)
+    A[:2, :2], A[:2, 2] = J, at - J @ x
+    return A
+
+
 def fit_homography(
     image: np.ndarray,
     model: EdgeModel,

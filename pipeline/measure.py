@@ -16,7 +16,13 @@ import numpy as np
 
 from pipeline.camera import Camera
 from pipeline.edgefit import EdgeFit, edge_support, fit_edges
-from pipeline.homography_fit import MIN_CLEARANCE_PX, HomographyFit, apply_h, fit_homography
+from pipeline.homography_fit import (
+    MIN_CLEARANCE_PX,
+    HomographyFit,
+    affine_part,
+    apply_h,
+    fit_homography,
+)
 from pipeline.homography_fit import support as edge_share
 from pipeline.pose import (
     ippe_candidates,
@@ -175,7 +181,7 @@ def whole_pad(
     # placed up to 10 px off, beyond where their edges are looked for). From the
     # homography's affine part the marks are looked for again; kept when clearly more
     # of them are found (a blur hides them from both starts alike).
-    affine = _affine_part(H, reference.corners_m.mean(axis=0))
+    affine = affine_part(H, reference.corners_m.mean(axis=0))
     fit_a, found_a = _marks_fit(levels, reference, affine)
     more = found_a >= max(MIN_MARKS_FOUND, found + AFFINE_GAIN)
     if fit_a is not None and more and _in_place(fit_a.H, H, reference, span):
@@ -202,17 +208,6 @@ def _in_place(fitted: np.ndarray, H: np.ndarray, reference: Reference, span: flo
     """Whether the whole pad's fit still puts the H's corners where ``H`` did."""
     moved = apply_h(fitted, reference.corners_m) - apply_h(H, reference.corners_m)
     return bool(np.max(np.hypot(moved[:, 0], moved[:, 1])) <= max(MOVED_PX, 0.03 * span))
-
-
-def _affine_part(H: np.ndarray, centre_m: np.ndarray) -> np.ndarray:
-    """The affine map that agrees with ``H`` at ``centre_m`` to first order."""
-    x = np.asarray(centre_m, np.float64)
-    w = float(H[2, :2] @ x + H[2, 2])
-    at = (H[:2, :2] @ x + H[:2, 2]) / w
-    J = (H[:2, :2] - np.outer(at, H[2, :2])) / w
-    A = np.eye(3)
-    A[:2, :2], A[:2, 2] = J, at - J @ x
-    return A
 
 
 def _fit_whole_pad(

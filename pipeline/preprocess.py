@@ -61,6 +61,14 @@ def check_image(image: object, name: str = "image_bgr") -> np.ndarray:
     return image
 
 
+def border_pixels(image: np.ndarray, width: int) -> np.ndarray:
+    """The values of the band ``width`` pixels wide along the image's edge (corners twice)."""
+    w = max(1, int(width))
+    return np.concatenate(
+        [image[:w].ravel(), image[-w:].ravel(), image[:, :w].ravel(), image[:, -w:].ravel()]
+    )
+
+
 def subsample(image: np.ndarray, max_width: int = WORK_WIDTH) -> tuple[np.ndarray, float]:
     """Shrink ``image`` to at most ``max_width`` columns (area interpolation).
 

@@ -18,7 +18,7 @@ from pipeline.hfit import HFit, fit_h, h_deformation
 from pipeline.homography_fit import Deformation
 from pipeline.marks import Mark, find_marks, symmetric_marks
 from pipeline.moments import shape_moments
-from pipeline.preprocess import check_image
+from pipeline.preprocess import border_pixels, check_image
 from pipeline.shape_match import ShapeMatcher
 from pipeline.template import reference_pyramid
 
@@ -35,6 +35,9 @@ _LEVELS = 9  # thresholds tried per channel between its 2nd and 98th percentiles
 _MIN_H_AREA = 0.002  # of the picture: smaller marks are text or noise, not the pad's H
 _MAX_H_AREA = 0.6
 _MIN_CONTRAST = 25.0  # H against its board on the learned channel, 0..255
+# The picture's border is its board's edge when its levels spread this little (of the
+# contrast): 0.01-0.02 on square boards and sheets, 0.09-0.35 on discs and paint on grass.
+_BOARD_UNIFORMITY = 0.05
 
 
 @dataclass(frozen=True, eq=False)
@@ -86,6 +89,15 @@ class Reference:
         if not self.marks:
             return None
         return EdgeModel.from_polygons([(m.corners_m, m.bright) for m in self.marks])
+
+    @cached_property
+    def board_is_outline(self) -> bool:
+        """Whether the picture's outer edge is its board's (a square board, a sheet:
+        its border all one level on the learned channel), which tells a far pad
+        (`pipeline.board_search`); not a disc on its floor, nor paint on grass."""
+        ch = self.channel.astype(np.float32)
+        border = border_pixels(ch, max(2, min(ch.shape) // 50))
+        return float(border.std()) <= _BOARD_UNIFORMITY * self.contrast
 
     @property
     def painted_marks(self) -> bool:

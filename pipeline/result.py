@@ -70,7 +70,8 @@ class FrameResult:
     ``score``: the share of the pad's edges found where the pose puts them
     (0..1). ``reason``: why nothing was detected. ``found_by``: "follow" (the
     H's sides fitted again where they were in the last frame), "track" (searched
-    in a window around where the pad was) or "search" (the whole frame).
+    in a window around where the pad was), "search" (the whole frame) or "board"
+    (the whole frame, a pad too far for its H found by its board's outline).
     ``homography``: pad metres -> frame pixels, for tracking the pad in the next
     frame. ``mask``: the threshold mask the pipeline searched with (uint8, 0/255,
     at its search size: frames wider than 640 px are searched subsampled), for

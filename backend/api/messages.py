@@ -56,6 +56,7 @@ class FrameResult(Model):
     found_by: str = Field(
         description='"follow": the H\'s sides fitted again where they were in the last frame; '
         '"track": searched in a window around where the pad was; "search": the whole frame; '
+        '"board": the whole frame, a pad too far for its H by its board\'s outline; '
         '"" when nothing was found'
     )
 

@@ -1250,7 +1250,7 @@ export interface components {
             eccentricity: number | null;
             /**
              * Found By
-             * @description "follow": the H's sides fitted again where they were in the last frame; "track": searched in a window around where the pad was; "search": the whole frame; "" when nothing was found
+             * @description "follow": the H's sides fitted again where they were in the last frame; "track": searched in a window around where the pad was; "search": the whole frame; "board": the whole frame, a pad too far for its H by its board's outline; "" when nothing was found
              */
             found_by: string;
             /** Hu */

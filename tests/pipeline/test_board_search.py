@@ -1,0 +1,92 @@
+"""A pad too far for its H to be placed, found by its board (`pipeline.board_search`).
+
+At 20 m the 0.55 m pad spans 15 px of a 640 x 480 frame at 60 degrees, its H 8 px
+with legs of 1.5: on the bench's far views (`pipeline.bench --sweep altitude`) the
+H's corners could not be placed on 12 of 40 frames, while the board around it
+still showed as a quadrilateral.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pipeline import Camera, Reference, process_frame
+from pipeline.bench.frames import SCENE_EVERY, make_scenes, make_view
+from pipeline.bench.hint import gravity_hint
+from pipeline.bench.tally import Tally
+from pipeline.board_search import find_boards
+from pipeline.homography_fit import apply_h
+from pipeline.preprocess import binarize_channel, to_channel
+from pipeline.render import get_design, make_pad_image
+from pipeline.render.view import render_view
+from pipeline.view import View
+
+CAM = Camera.from_fov(640, 480, 60.0)
+DESIGN = get_design("default")
+
+
+@pytest.fixture(scope="module")
+def reference():
+    return Reference.from_image(DESIGN.draw().image, DESIGN.size_m)
+
+
+def _far_view(j: int, altitude: float = 20.0):
+    """Frame ``j`` of a far point of the altitude sweep's kind: the pad's frame, its
+    empty twin, the view and the attitude hint."""
+    scenes = make_scenes(DESIGN, [0, 2000 + j // SCENE_EVERY], "today", ())
+    view, noise_seed = make_view([0, 503, j, 11], CAM, DESIGN, "today", altitude=(altitude,) * 2)
+    pad = render_view(scenes.pad, CAM, view, np.random.default_rng(noise_seed))
+    empty = render_view(scenes.empty, CAM, view, np.random.default_rng(noise_seed))
+    return pad, empty, view, gravity_hint(view.R_pad_cam, [0, 3, j, 12])
+
+
+def _boards(frame: np.ndarray, reference: Reference) -> tuple[View, list[np.ndarray]]:
+    """The boards found on the frame enlarged twice, as `process_frame`'s last search."""
+    view = View.enlarged(frame.shape, 1280)
+    binary = binarize_channel(to_channel(view.image(frame), reference.projection), "adaptive")
+    return view, find_boards(binary, reference, view.scale)
+
+
+@pytest.mark.parametrize("j", [3, 20, 23])
+def test_a_pad_whose_h_is_too_small_to_place_is_found_by_its_board(reference, j):
+    frame, _, view, hint = _far_view(j)
+    res = process_frame(frame, reference, CAM, gravity_hint=hint)
+    assert res.detected and res.found_by == "board", res.reason
+    tally = Tally()
+    tally.score(True, res.pose, view, DESIGN.symmetric)
+    assert tally.pos_pct[0] < 3.0 and tally.rot_deg[0] < 2.0, (tally.pos_pct, tally.rot_deg)
+    # The board alone places the pad's centre where the camera sees it.
+    enlarged, found = _boards(frame, reference)
+    centre = view.R_pad_cam.T @ -view.position_m
+    seen = (CAM.K @ centre)[:2] / centre[2]
+    placed = apply_h(np.linalg.inv(enlarged.matrix) @ found[0], np.zeros((1, 2)))[0]
+    assert np.hypot(*(placed - seen)) < 0.5, (placed, seen)
+
+
+@pytest.mark.parametrize("j", range(0, 40, 4))
+def test_no_board_is_found_on_the_same_floor_without_the_pad(reference, j):
+    _, empty, _, hint = _far_view(j)
+    assert _boards(empty, reference)[1] == []
+    assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected
+
+
+def test_a_dark_square_holding_a_bright_blob_that_is_no_h_is_not_a_pad(reference):
+    # What the board search grows from: a small bright mark on a dark square. The
+    # square is found; what it holds is not the pad's pattern.
+    frame = np.full((480, 640, 3), 120, np.uint8)
+    rng = np.random.default_rng(3)
+    for x, y in ((100, 100), (300, 240), (500, 380)):
+        frame[y - 8 : y + 8, x - 8 : x + 8] = 30
+        frame[y - 3 : y + 3, x - 3 : x + 3] = 230  # a square blob
+    frame[180:196, 400:416] = 30
+    frame[182:194, 407:409] = 230  # a bar
+    noisy = np.clip(frame + rng.normal(0, 6, frame.shape), 0, 255).astype(np.uint8)
+    assert _boards(noisy, reference)[1] == []
+
+
+def test_only_a_pad_whose_picture_is_its_board_is_looked_for_by_it():
+    assert Reference.from_image(make_pad_image(800), 0.55).board_is_outline
+    for name in ("orange_ring", "grass_paint"):  # a disc on its floor, paint on grass
+        design = get_design(name)
+        assert not Reference.from_image(design.draw().image, design.size_m).board_is_outline
