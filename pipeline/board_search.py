@@ -26,9 +26,9 @@ import numpy as np
 
 from pipeline.homography_fit import affine_part, fit_homography
 from pipeline.measure import pad_box_m
-from pipeline.preprocess import Binarized, border_pixels
+from pipeline.preprocess import border_pixels
 from pipeline.reference import RELIABLE_H_PX, Reference
-from pipeline.shapes import regions
+from pipeline.shapes import Region
 from pipeline.template import pad_pattern
 
 MIN_BOARD_PX = 12.0  # a board narrower than this (frame pixels) holds too few for its pattern
@@ -37,6 +37,7 @@ MIN_BOARD_CONTRAST = 8.0  # the board against its floor, levels of 0..255
 # ... and against the floor's noise (robust spread around the board, over the contrast):
 # 0.10-0.20 on the bench's far views (15-30 dB), 0.62 grown from a real photo's noise.
 MAX_FLOOR_NOISE = 0.35
+MAX_SEEDS = 48  # marks a board is grown around per frame at most
 MAX_BOARDS = 6  # quadrilaterals fitted per frame at most, the most contrasted first
 # A fitted pad counts when its pattern matches the reference's (NCC) and half its H's
 # sides are found where the fit puts them: on the bench's far views (16-22 m, 565
@@ -62,21 +63,29 @@ class Board:
     contrast: float
 
 
-def find_boards(binary: Binarized, reference: Reference, enlarged: float) -> list[np.ndarray]:
+def find_boards(
+    levels: np.ndarray, shapes: list[Region], reference: Reference, enlarged: float
+) -> list[np.ndarray]:
     """Homographies (pad metres -> view pixels) of the pads found by their boards,
-    best pattern first, on a view's thresholded channel; ``enlarged``: view pixels
-    per frame pixel."""
+    best pattern first, on a view's smoothed channel (``levels``) and around its
+    regions of the H's polarity (``shapes``, `pipeline.find.search`'s); ``enlarged``:
+    view pixels per frame pixel."""
     if not reference.board_is_outline:
         return []
-    levels = binary.levels
     ratio = reference.pad_size_m / float(np.ptp(reference.corners_m, axis=0).max())
-    # The marks of the H's polarity small enough for their H to be missed.
+    # The marks of the H's polarity small enough for their H to be missed, and large
+    # enough for a board the size of MIN_BOARD_PX around them; on a textured floor
+    # (a thousand of them) the largest first, MAX_SEEDS of them.
     most = RELIABLE_H_PX * enlarged
-    seeds = regions(binary.mask, min_area=MIN_SEED_PX**2, max_area=most * most)
+    least = max(MIN_SEED_PX, MIN_BOARD_PX * enlarged / (2.0 * ratio))
+    seeds = []
+    for region in shapes:
+        size = float(np.ptp(region.contour, axis=0).max())
+        if least <= size <= most:
+            seeds.append(region)
+    seeds.sort(key=lambda r: -r.area)
     boards: list[Board] = []
-    for seed in seeds:
-        if float(np.ptp(seed.contour, axis=0).max()) > most:
-            continue
+    for seed in seeds[:MAX_SEEDS]:
         board = _grow_board(levels, seed.contour, ratio, MIN_BOARD_PX * enlarged)
         if board is not None and not any(_same(board.quad, b.quad) for b in boards):
             boards.append(board)

@@ -154,9 +154,10 @@ def search(
     to_frame: np.ndarray,
     tracking: bool = False,
     enlarged: float = 1.0,
-) -> tuple[Binarized, Iterator[Located]]:
-    """The view's binarized channel, and the pad's H's it holds, best shape first,
-    found as they are asked for (the caller stops at the first it can measure).
+) -> tuple[Binarized, list[Region], Iterator[Located]]:
+    """The view's binarized channel, its regions of the H's polarity, and the pad's
+    H's it holds, best shape first, found as they are asked for (the caller stops
+    at the first it can measure).
 
     ``image``: the view's image (BGR); ``to_frame``: view pixels -> frame pixels
     (a scale and a shift). ``tracking``: the view is the window where the pad was
@@ -174,8 +175,8 @@ def search(
     found = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=0.5 * area)
     tally.shapes += len(found)
     stages.lap("contours")
-    return binary, _hits(found, image, binary, reference, camera, verifier, tally, stages,
-                         to_frame, tracking, enlarged)  # fmt: skip
+    return binary, found, _hits(found, image, binary, reference, camera, verifier, tally,
+                                stages, to_frame, tracking, enlarged)  # fmt: skip
 
 
 def _hits(

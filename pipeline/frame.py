@@ -42,6 +42,7 @@ from pipeline.preprocess import (
 )
 from pipeline.reference import SEARCH_WIDTH_PX, Reference
 from pipeline.result import FrameResult
+from pipeline.shapes import Region
 from pipeline.view import MAX_ENLARGEMENT, View, enlargement
 
 FALLBACK_METHOD = "shadow"  # tried when the default threshold finds nothing
@@ -152,12 +153,12 @@ def process_frame(
     # enlarged: a leg of 2-3 px keeps its shape and corners when interpolated.
     far = View.enlarged(image.shape, FAR_SEARCH_WIDTH_PX)
     tries.append(("search", far, method))
-    far_binary: Binarized | None = None
+    far_found: tuple[Binarized, list[Region]] | None = None
     for way, view, how in _with_closer_looks(tries, tally, image.shape, reference):
         if view is None:
             continue
         to_frame = np.linalg.inv(view.matrix)
-        binary, hits = search(
+        binary, shapes, hits = search(
             view.image(image),
             reference,
             view.camera(cam),
@@ -171,7 +172,7 @@ def process_frame(
         )
         mask = _mask_for(binary.mask, view, search_view)
         if view is far:
-            far_binary = binary
+            far_found = (binary, shapes)
         for hit in hits:
             measured = measure(
                 image,
@@ -187,9 +188,10 @@ def process_frame(
             contour = apply_h(to_frame, hit.candidate.region.contour.astype(np.float64))
             return _detected(measured, reference, contour, yaw_hint, way, mask, stages, t_start)
     # Last, a pad too far for its H to be placed, by its board on the finest view.
-    if far_binary is not None:
+    if far_found is not None:
+        far_binary, shapes = far_found
         to_frame = np.linalg.inv(far.matrix)
-        for H in find_boards(far_binary, reference, max(1.0, far.scale)):
+        for H in find_boards(far_binary.levels, shapes, reference, max(1.0, far.scale)):
             measured = measure(
                 image, reference, cam, to_frame @ H, gravity=gravity, found=(far, far_binary.levels)
             )

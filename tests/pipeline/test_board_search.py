@@ -16,10 +16,12 @@ from pipeline.bench.frames import SCENE_EVERY, make_scenes, make_view
 from pipeline.bench.hint import gravity_hint
 from pipeline.bench.tally import Tally
 from pipeline.board_search import find_boards
+from pipeline.candidates import MIN_H_AREA_PX
 from pipeline.homography_fit import apply_h
 from pipeline.preprocess import binarize_channel, to_channel
 from pipeline.render import get_design, make_pad_image
 from pipeline.render.view import render_view
+from pipeline.shapes import regions
 from pipeline.view import View
 
 CAM = Camera.from_fov(640, 480, 60.0)
@@ -45,7 +47,8 @@ def _boards(frame: np.ndarray, reference: Reference) -> tuple[View, list[np.ndar
     """The boards found on the frame enlarged twice, as `process_frame`'s last search."""
     view = View.enlarged(frame.shape, 1280)
     binary = binarize_channel(to_channel(view.image(frame), reference.projection), "adaptive")
-    return view, find_boards(binary, reference, view.scale)
+    shapes = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=binary.mask.size / 2)
+    return view, find_boards(binary.levels, shapes, reference, view.scale)
 
 
 @pytest.mark.parametrize("j", [3, 20, 23])
