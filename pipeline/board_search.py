@@ -4,13 +4,14 @@ From some 15 m on a 640 px frame the H spans under a dozen pixels with legs of
 two: `pipeline.candidates` can no longer place its corners, while its board (the
 square the H is painted on, a sheet of paper) is two to four times wider, and its
 outline is four long straight edges. Around every small mark of the H's polarity
-the board is grown: the pixels nearer the level right around the mark than the
-floor's level around the board (a board lighter or darker than its floor alike),
-as far as they reach; a board that does not stand out of its floor's noise is none.
-Where they make a quadrilateral of the pad's proportions, the whole pad (H and
-marks) is fitted to the edges inside it from each of its four turns, taken affine
-(so small, its perspective is noise), and kept when most of its H's sides are
-found where the fit puts them and the picture inside matches the reference's.
+the board is grown: the pixels nearer the board's level (read around the mark) than
+the floor's level around the board (a board lighter or darker than its floor
+alike), as far as they reach; a board that does not stand out of its floor's noise
+is none. Where they make a quadrilateral of the pad's proportions, the whole pad (H
+and marks) is fitted to the edges inside it from each of its four turns, taken
+affine (so small, its perspective is noise), and kept when many of its H's sides
+and some of its board's outline are found where the fit puts them, and the picture
+inside matches the reference's.
 
 Only a pad whose picture is its board (every border pixel of the reference the
 same level: `Reference.board_is_outline`) is looked for so.
@@ -39,18 +40,20 @@ MIN_BOARD_CONTRAST = 8.0  # the board against its floor, levels of 0..255
 MAX_FLOOR_NOISE = 0.35
 MAX_SEEDS = 48  # marks a board is grown around per frame at most
 MAX_BOARDS = 6  # quadrilaterals fitted per frame at most, the most contrasted first
-# A fitted pad counts when its pattern matches the reference's (NCC) and half its H's
-# sides are found where the fit puts them: on the bench's far views (16-22 m, 565
-# quadrilaterals), no other quadrilateral found over 0.51 of them (their NCC up to
-# 0.81); true pads found 0.55-0.9 at NCC 0.61-0.75 where their H was too small to place.
-MIN_BOARD_NCC = 0.6
-MIN_H_FOUND = 0.5
+# A fitted pad counts when its pattern matches the reference's (NCC), and 40 % of its
+# H's sides and 10 % of its board's outline are found where the fit puts them. On the
+# bench's far views (14-24 m, seven designs, pad and empty frames, ~2000 fits), no
+# other quadrilateral found 0.4 of the H's sides at NCC 0.55 but a dark H painted on
+# a light floor, where no board is (its "outline" found 0.0, true boards' up to 1).
+MIN_BOARD_NCC = 0.55
+MIN_H_FOUND = 0.4
+MIN_OUTLINE_FOUND = 0.1
 # Its pose counts when the pad's edges are found where it puts them: the bench's far
 # boards posed within 3 % of the altitude found 0.22-0.5 of them, those 10-40 % off, 0.07-0.13.
 MIN_BOARD_SUPPORT = 0.2
 MIN_BOARD_SHARE = 0.3  # of the quadrilateral, at the board's level (not the mark's)
 _QUAD_EPS = 0.06  # Douglas-Peucker tolerance, of the hull's perimeter
-_FILL = (0.75, 1.15)  # the grown board's area over its quadrilateral's
+_FILL = (0.75, 1.25)  # the grown board's area over its quadrilateral's
 _CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
 
 
@@ -72,7 +75,7 @@ def find_boards(
     view pixels per frame pixel."""
     if not reference.board_is_outline:
         return []
-    ratio = reference.pad_size_m / float(np.ptp(reference.corners_m, axis=0).max())
+    ratio = reference.pad_over_h
     # The marks of the H's polarity small enough for their H to be missed, and large
     # enough for a board the size of MIN_BOARD_PX around them; on a textured floor
     # (a thousand of them) the largest first, MAX_SEEDS of them.
@@ -86,9 +89,9 @@ def find_boards(
     seeds.sort(key=lambda r: -r.area)
     boards: list[Board] = []
     for seed in seeds[:MAX_SEEDS]:
-        board = _grow_board(levels, seed.contour, ratio, MIN_BOARD_PX * enlarged)
-        if board is not None and not any(_same(board.quad, b.quad) for b in boards):
-            boards.append(board)
+        for board in _grow_boards(levels, seed.contour, ratio, MIN_BOARD_PX * enlarged):
+            if not any(_same(board.quad, b.quad) for b in boards):
+                boards.append(board)
     boards.sort(key=lambda b: -b.contrast)
     found = []
     for board in boards[:MAX_BOARDS]:
@@ -99,43 +102,79 @@ def find_boards(
     return [H for _, H in found]
 
 
-def _grow_board(
+def _grow_boards(
     levels: np.ndarray, contour: np.ndarray, ratio: float, min_px: float
-) -> Board | None:
-    """The board around a mark, when it is a quadrilateral the pad's size for it."""
+) -> list[Board]:
+    """The board around a mark, grown two ways, where it is a quadrilateral the pad's
+    size for the mark.
+
+    Between a light H and a dark board (or the reverse) the blur crosses the floor's
+    level, so the board is not simply the pixels off the floor's level. It is grown
+    from its level right next to the mark (which holds where the board is narrow
+    around its H), and from its core's level a little further out, bridged to the
+    mark across the blur and its holes filled (which holds where the floor's blotches
+    come near the level next to the mark). Either may fail where the other does not.
+    """
     lo, hi = contour.min(axis=0), contour.max(axis=0)
     size = float(np.max(hi - lo)) + 1.0
     if size < MIN_SEED_PX:
-        return None
+        return []
     # A window with room for the whole pad around its H, and some floor.
     half = int(0.75 * ratio * size) + 4
     cx, cy = (int(v) for v in 0.5 * (lo + hi))
     x0, y0 = cx - half, cy - half
     if x0 < 0 or y0 < 0 or cx + half >= levels.shape[1] or cy + half >= levels.shape[0]:
-        return None
+        return []
     win = levels[y0 : cy + half + 1, x0 : cx + half + 1]
     seed = np.zeros(win.shape, np.uint8)
     cv2.fillPoly(seed, [(contour - [x0, y0]).astype(np.int32).reshape(-1, 1, 2)], 1)
-    ring = cv2.dilate(seed, np.ones((5, 5), np.uint8)) & (1 - seed)
     border = border_pixels(win, 2)
     floor = float(np.median(border))
-    # The board's level: its core's, beyond the H's blur (the ring's median, the
-    # H's light blurred into it, would set the threshold toward the floor's and
-    # grow the board by a blur's width all round).
-    around = win[ring > 0]
-    darker = float(np.median(around)) < floor
-    board = float(np.percentile(around, 10 if darker else 90))
-    contrast = abs(board - floor)
     noise = 1.4826 * float(np.median(np.abs(border - floor)))
-    if contrast < MIN_BOARD_CONTRAST or noise > MAX_FLOOR_NOISE * contrast:
-        return None
-    grown = (np.abs(win - floor) > 0.5 * contrast).astype(np.uint8)
-    # (opened: the floor's noise joins a low-contrast board by threads a pixel wide)
-    grown = cv2.morphologyEx(grown, cv2.MORPH_OPEN, _CROSS) | seed
+    near = cv2.dilate(seed, np.ones((5, 5), np.uint8)) & (1 - seed)
+    core = cv2.dilate(seed, np.ones((9, 9), np.uint8)) & (1 - seed)
+    boards = []
+    for ring, percent, bridged in ((near, 10.0, False), (core, 5.0, True)):
+        # The board's level: beyond the H's blur (a median, the H's light blurred
+        # into it, would set the threshold toward the floor's).
+        around = win[ring > 0]
+        darker = float(np.median(around)) < floor
+        contrast = abs(float(np.percentile(around, percent if darker else 100 - percent)) - floor)
+        if contrast < MIN_BOARD_CONTRAST or noise > MAX_FLOOR_NOISE * contrast:
+            continue
+        grown = (np.abs(win - floor) > 0.5 * contrast).astype(np.uint8)
+        # (opened: the floor's noise joins a low-contrast board by threads a pixel wide)
+        grown = cv2.morphologyEx(grown, cv2.MORPH_OPEN, _CROSS)
+        if bridged:
+            part = _part_with(grown | near | seed, seed, fill=True)
+        else:
+            part = _part_with(grown | seed, near, fill=False)
+        quad = _board_quad(part, seed, size, ratio, min_px)
+        if quad is not None:
+            boards.append(Board(quad + np.array([x0, y0], np.float64), contrast))
+    return boards
+
+
+def _part_with(grown: np.ndarray, voters: np.ndarray, *, fill: bool) -> np.ndarray:
+    """The component of ``grown`` most of the ``voters`` pixels lie in, its holes
+    filled when ``fill``."""
+    if fill:
+        count, labels = cv2.connectedComponents(1 - grown, connectivity=4)
+        inside = np.ones(count, bool)
+        inside[0] = False
+        inside[np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])] = False
+        grown = grown | inside[labels].astype(np.uint8)
     count, labels = cv2.connectedComponents(grown, connectivity=8)
-    votes = np.bincount(labels[ring > 0], minlength=count)
+    votes = np.bincount(labels[voters > 0], minlength=count)
     votes[0] = 0
-    part = (labels == int(np.argmax(votes))).astype(np.uint8)
+    return (labels == int(np.argmax(votes))).astype(np.uint8)
+
+
+def _board_quad(
+    part: np.ndarray, seed: np.ndarray, size: float, ratio: float, min_px: float
+) -> np.ndarray | None:
+    """The grown board's quadrilateral (window pixels, clockwise), when it is one,
+    inside the window, the pad's size for a mark of ``size``."""
     if part[0].any() or part[-1].any() or part[:, 0].any() or part[:, -1].any():
         return None  # it runs into the floor: no board's edge all round
     outlines, _ = cv2.findContours(part, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
@@ -154,7 +193,7 @@ def _grow_board(
         return None
     if span < min_px or not _pad_sized(span, size, ratio):
         return None
-    return Board(_clockwise(quad) + np.array([x0, y0], np.float64), contrast)
+    return _clockwise(quad)
 
 
 def _pad_sized(span: float, mark: float, ratio: float) -> bool:
@@ -168,30 +207,45 @@ def _fit_board(
 ) -> tuple[float, np.ndarray] | None:
     """The pad fitted from the quadrilateral in each of its four turns: the best
     pattern's (NCC, homography), when it is the pad's."""
-    box = pad_box_m(reference).astype(np.float32)
-    n_h = len(reference.corners_m)
+    box = pad_box_m(reference)
+    h_sides = np.arange(len(reference.edge_model.polygon)) < len(reference.corners_m)
+    outline = _outline_sides(reference)
     best: tuple[float, np.ndarray] | None = None
     for turn in range(4):
-        start = cv2.getPerspectiveTransform(box, np.roll(quad, -turn, axis=0).astype(np.float32))
+        turned = np.roll(quad, -turn, axis=0)
+        start = cv2.getPerspectiveTransform(box.astype(np.float32), turned.astype(np.float32))
         fit = fit_homography(
             levels, reference.edge_model, start.astype(np.float64), iterations=3, search_px=3.0,
             sides_alike=False,
         )  # fmt: skip
-        if fit is None:
+        # (an H too small for any of its sides to be told is no evidence)
+        if fit is None or _found_share(fit.side_found[h_sides]) < MIN_H_FOUND:
             continue
-        h_found = fit.side_found[:n_h]
-        h_found = h_found[np.isfinite(h_found)]
-        if not len(h_found) or float(h_found.mean()) < MIN_H_FOUND:
-            continue  # (an H too small for any of its sides to be told is no evidence)
+        if outline is not None and _found_share(fit.side_found[outline]) < MIN_OUTLINE_FOUND:
+            continue
         # So small a pad shows no perspective: the fit's is its noise, which skewed
         # the pose by up to 40 % of the altitude. Its affine part is kept.
         H = affine_part(fit.H, np.zeros(2))
-        ncc = pad_pattern(
-            levels, reference.template_pyramid, reference.channel_px_per_m, pad_box_m(reference), H
-        )
+        ncc = pad_pattern(levels, reference.template_pyramid, reference.channel_px_per_m, box, H)
         if math.isfinite(ncc) and ncc >= MIN_BOARD_NCC and (best is None or ncc > best[0]):
             best = (ncc, H)
     return best
+
+
+def _outline_sides(reference: Reference) -> np.ndarray | None:
+    """Which of the pad's sides are its board's outline (its outermost mark's), or
+    None when the reference found no mark around its H."""
+    if not reference.marks:
+        return None
+    spans = [float(np.ptp(m.corners_m, axis=0).max()) for m in reference.marks]
+    return reference.edge_model.polygon == 1 + int(np.argmax(spans))
+
+
+def _found_share(found: np.ndarray) -> float:
+    """The mean share found of the sides that could be told (NaN: too short or too
+    close to another at this size); 0 when none could."""
+    told = found[np.isfinite(found)]
+    return float(told.mean()) if len(told) else 0.0
 
 
 def _clockwise(quad: np.ndarray) -> np.ndarray:

@@ -100,6 +100,12 @@ class Reference:
         return float(border.std()) <= _BOARD_UNIFORMITY * self.contrast
 
     @property
+    def pad_over_h(self) -> float:
+        """The pad's width over its H's: how far around a mark the size of the H
+        the pad reaches."""
+        return self.pad_size_m / float(np.ptp(self.corners_m, axis=0).max())
+
+    @property
     def painted_marks(self) -> bool:
         """Whether the pad shows marks in the H's paint (bars, rings, stars) besides
         its board's rim: what makes its pattern other than an H's on a plain ground."""

@@ -67,6 +67,51 @@ def test_a_pad_whose_h_is_too_small_to_place_is_found_by_its_board(reference, j)
     assert np.hypot(*(placed - seen)) < 0.5, (placed, seen)
 
 
+def _sweep_view(design: str, camera: Camera, point: int, altitude: float, j: int):
+    """Frame ``j`` of point ``point`` of ``pipeline.bench --sweep altitude`` (its
+    seeds): the pad's frame, its empty twin, the view, the attitude hint and the
+    reference."""
+    d = get_design(design)
+    scenes = make_scenes(d, [0, 1000 + (point * 40 + j) // SCENE_EVERY % 4], "today", ())
+    view, noise_seed = make_view([0, point, j, 11], camera, d, "today", altitude=(altitude,) * 2)
+    pad = render_view(scenes.pad, camera, view, np.random.default_rng(noise_seed))
+    empty = render_view(scenes.empty, camera, view, np.random.default_rng(noise_seed))
+    reference = Reference.from_image(d.draw().image, d.size_m)
+    return pad, empty, view, gravity_hint(view.R_pad_cam, [0, point, j, 12]), reference
+
+
+@pytest.mark.parametrize("j", [20, 26, 29])
+def test_a_board_is_grown_from_its_core_where_the_floor_comes_near_its_rim(j):
+    # 18 m: the level right next to the H, blurred toward the floor's, joined the
+    # board to the floor's blotches, or set a contrast the floor's noise drowned.
+    frame, _, view, hint, reference = _sweep_view("default", CAM, 13, 18.0, j)
+    res = process_frame(frame, reference, CAM, gravity_hint=hint)
+    assert res.detected and res.found_by == "board", res.reason
+    tally = Tally()
+    tally.score(True, res.pose, view, DESIGN.symmetric)
+    assert tally.pos_pct[0] < 5.0, tally.pos_pct
+
+
+@pytest.mark.parametrize("j", [10, 12, 13, 18])
+def test_a_dark_h_painted_on_a_light_floor_is_no_dark_h_on_its_board(j):
+    # The dark-on-light pad's H painted straight on the floor, 16 m away: its pattern
+    # is the pad's (NCC 0.9), but no board's outline is where the fit puts it.
+    _, empty, _, hint, reference = _sweep_view("dark_on_light", CAM, 13, 16.364, j)
+    assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected
+
+
+@pytest.mark.slow
+def test_a_pad_32_m_away_on_a_1280x720_frame_is_found_on_the_frame_doubled():
+    # At its own resolution the pad's H (10 px, legs of 2) fell apart under the
+    # threshold on a light floor: none of these 10 frames was found.
+    wide = Camera.from_fov(1280, 720, 60.0)
+    found = 0
+    for j in range(30, 40):
+        frame, _, _, hint, reference = _sweep_view("default", wide, 17, 32.0, j)
+        found += process_frame(frame, reference, wide, gravity_hint=hint).detected
+    assert found >= 8, found
+
+
 @pytest.mark.parametrize("j", range(0, 40, 4))
 def test_no_board_is_found_on_the_same_floor_without_the_pad(reference, j):
     _, empty, _, hint = _far_view(j)

@@ -1,13 +1,14 @@
-"""A small pad (14 m on a 640 x 480 frame, 28 m on 1280 x 720): judged by the whole
-pad's pattern, and on a frame too wide to enlarge whole, looked at closer.
+"""A small pad (14 m on a 640 x 480 frame, 28 m on 1280 x 720, 42 m on 1920 x 1080):
+judged by the whole pad's pattern, and on a camera's native frame, enlarged.
 
 So far away the default pad spans 20-24 px: the bars beside its H are 1.5-2 px wide
 and their edges merge, and a camera's blur of a pixel takes the paint's light into
 the board between them. The H then counts as the pad's when the whole pad's
 pattern matches the reference's (`pipeline.template.pad_pattern`), and its board's
-level is read where that blur leaves it pure. A 1280 x 720 frame is searched at its
-own resolution, where such an H (12 px, legs of 2 px) loses its shape: the small
-marks refused there are searched again in windows enlarged around them.
+level is read where that blur leaves it pure. At a frame's own resolution such an H
+(12 px, legs of 2 px) loses its shape: the last search enlarges a 1280 x 720 frame
+twice, a 1920 x 1080 one by a third and then a window around each small mark
+refused there twice.
 """
 
 from __future__ import annotations
@@ -27,7 +28,6 @@ from pipeline.template import pad_pattern
 from tests.pipeline.bench_support import score_bench_frames
 
 CAM = Camera.from_fov(640, 480, 60.0)
-WIDE = Camera.from_fov(1280, 720, 60.0)
 
 
 @pytest.fixture(scope="module")
@@ -63,13 +63,15 @@ def test_a_pad_14_m_away_through_a_camera_blur_of_a_pixel_is_found(reference):
     assert found >= 11, found
 
 
-def test_a_pad_28_m_away_on_a_1280x720_frame_is_found_in_a_closer_look(reference):
+@pytest.mark.parametrize(("width", "height", "altitude"), [(1280, 720, 28.0), (1920, 1080, 42.0)])
+def test_a_pad_spanning_22_px_of_a_native_frame_is_found(reference, width, height, altitude):
+    wide = Camera.from_fov(width, height, 60.0)
     errors = []
     for k in range(12):
-        frame, position, R, yaw = _view(make_pad_image(800), 28.0, k, WIDE)
-        res = process_frame(frame, reference, WIDE, yaw_hint=yaw, gravity_hint=gravity_hint(R, [k]))
+        frame, position, R, yaw = _view(make_pad_image(800), altitude, k, wide)
+        res = process_frame(frame, reference, wide, yaw_hint=yaw, gravity_hint=gravity_hint(R, [k]))
         if res.detected:
-            errors.append(np.linalg.norm(res.pose.position_m - position) / 28.0)
+            errors.append(np.linalg.norm(res.pose.position_m - position) / altitude)
     # Before: 3 of 12 (searched at the frame's own resolution only).
     assert len(errors) >= 9, len(errors)
     # Through a blur of a pixel the pad's points are a pixel off: 5 % of the altitude
