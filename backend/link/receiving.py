@@ -144,7 +144,9 @@ class LinkReceiver(LinkCore):
         rate = self._stream_rates.get("LOCAL_POSITION_NED")
         stale_ms = POSITION_STALE_MS if not rate else max(POSITION_STALE_MS, 3000.0 / rate)
         old = self._telemetry
-        changes = clock_changes(old, boot_ms, stale_ms)
+        # (_rebooting_until stays set from an accepted reboot until its new boot is heard)
+        asked = self._rebooting_until > 0.0
+        changes = clock_changes(old, boot_ms, stale_ms, reboot_asked=asked)
         if changes.get("boots", old.boots) != old.boots:
             # What the cache holds came from the previous boot.
             self._latest = {k: v for k, v in self._latest.items() if k == "HEARTBEAT"}
@@ -153,7 +155,8 @@ class LinkReceiver(LinkCore):
                 # adds some): the indices heard count no more; the values stay.
                 self._param_indices.clear()
             log.info("the vehicle rebooted (its clock went back to %d ms)", boot_ms)
-            rebooting = self._state == LinkState.LOST and self._rebooting_until > 0.0
+            rebooting = self._state == LinkState.LOST and asked
+            self._rebooting_until = 0.0  # (the new boot is heard: nothing more to wait for)
         else:
             rebooting = False
         if changes.get("position_stale") and not old.position_stale:
@@ -161,7 +164,6 @@ class LinkReceiver(LinkCore):
         self._apply(changes)
         if rebooting:
             # the new boot is heard (its heartbeat came first): no need to wait out the hold
-            self._rebooting_until = 0.0
             self._set_state(LinkState.UP, "the vehicle is back from its reboot")
 
     def _apply_handler(

@@ -252,15 +252,24 @@ _VEHICLE_FIELDS = (
 _DEFAULTS = {f.name: f.default for f in fields(Telemetry)}
 
 
-def clock_changes(tel: Telemetry, boot_ms: int, stale_ms: float) -> dict[str, Any]:
+def clock_changes(
+    tel: Telemetry, boot_ms: int, stale_ms: float, *, reboot_asked: bool = False
+) -> dict[str, Any]:
     """What the vehicle's clock reading ``boot_ms`` changes in ``tel``.
 
     Going back is a reboot: every vehicle field returns to "not reported" (a position
     from before the reboot is not where the new boot thinks it is). Going on past
     ``stale_ms`` since the latest LOCAL_POSITION_NED drops the position.
+    ``reboot_asked``: a reboot was accepted and its new boot not yet heard; then the
+    clock going back by half counts too (a boot rebooted a second after it began goes
+    back less than ``REBOOT_BACKSTEP_MS``; a reordered message of the old boot, a few
+    ms behind, does not go back by half).
     """
     last = tel.vehicle_time_boot_ms
-    if last is not None and boot_ms < last - REBOOT_BACKSTEP_MS:
+    step = REBOOT_BACKSTEP_MS
+    if reboot_asked and last is not None:
+        step = min(step, last // 2)
+    if last is not None and boot_ms < last - step:
         changes: dict[str, Any] = {name: _DEFAULTS[name] for name in _VEHICLE_FIELDS}
         changes.update(vehicle_time_boot_ms=boot_ms, boots=tel.boots + 1)
         return changes

@@ -209,6 +209,35 @@ def test_an_accepted_reboot_takes_the_link_down_at_once(peer: Any, make_link) ->
     assert link.land().ok
 
 
+def test_a_reboot_asked_a_second_into_a_boot_is_told_by_its_clock(peer: Any, make_link) -> None:
+    # The e2e suite, loaded, rebooted the stand-in a second after its last boot: the
+    # clock went back from ~1000 ms to a few ms, less than REBOOT_BACKSTEP_MS, and the
+    # new boot was never counted (a page waited for it for a minute).
+    def restart(p: Any, msg: Any) -> bool:
+        if msg.get_type() == "COMMAND_LONG" and msg.command == 246:
+            p.heartbeats = False
+            p.ack(msg.command, mavlink2.MAV_RESULT_ACCEPTED)
+            return True
+        return False
+
+    link = make_link(f"tcp:127.0.0.1:{peer.port}", heartbeat_timeout_s=30.0)
+    assert _up(link)
+    peer.send(mavlink2.MAVLink_attitude_message(1000, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0))
+    assert link.wait_until(lambda t: t.vehicle_time_boot_ms == 1000, 20.0)
+    peer.responder = restart
+    assert link.reboot().ok
+    # the boot being left answers a last time, a message a few ms out of order: not
+    # the new boot
+    peer.send(peer.heartbeat_msg())
+    peer.send(mavlink2.MAVLink_attitude_message(990, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0))
+    assert link.wait_until(lambda t: t.attitude_time_boot_ms == 990, 20.0)
+    assert link.telemetry.boots == 0
+    peer.heartbeats = True  # booted
+    peer.send(mavlink2.MAVLink_attitude_message(30, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0))
+    assert link.wait_until(lambda t: t.boots == 1 and t.vehicle_time_boot_ms == 30, 20.0)
+    assert _up(link, 20.0)
+
+
 def test_heartbeats_of_the_boot_being_left_do_not_bring_the_link_back(peer: Any, make_link) -> None:
     # ArduPilot answers the reboot and restarts a moment later: its last heartbeats
     # must not say the link is up again while the vehicle goes away.

@@ -21,7 +21,7 @@ from backend.link import (
     parse_url,
 )
 from backend.link import commands as cmd
-from backend.link.telemetry import TELEMETRY_HANDLERS, StatusTextAssembler
+from backend.link.telemetry import TELEMETRY_HANDLERS, StatusTextAssembler, clock_changes
 
 
 def test_mode_table_is_exactly_the_quad_modes() -> None:
@@ -402,3 +402,19 @@ def test_stream_messages_and_rates() -> None:
     for bad in ({"ATTITUDE": 0}, {"ATTITUDE": 1000}, {"ATTITUDE": "fast"}, {"NOPE": 1}):
         with pytest.raises(ValueError, match="stream_rates_hz"):
             streams.check_rates(bad)
+
+
+@pytest.mark.parametrize(
+    ("last", "now", "asked", "reboot"),
+    [
+        (60_000, 58_000, False, True),  # back by more than REBOOT_BACKSTEP_MS
+        (60_000, 59_500, False, False),  # a reordered message
+        (60_000, 59_500, True, False),  # ... even with a reboot asked
+        (1_000, 30, False, False),  # a second into a boot, no reboot asked: not told
+        (1_000, 30, True, True),  # ... a reboot asked: back by more than half
+        (1_000, 990, True, False),  # the boot being left, a few ms out of order
+    ],
+)
+def test_the_clock_going_back_is_a_reboot(last: int, now: int, asked: bool, reboot: bool) -> None:
+    changes = clock_changes(Telemetry(vehicle_time_boot_ms=last), now, 1500.0, reboot_asked=asked)
+    assert (changes.get("boots") == 1) == reboot
