@@ -185,18 +185,20 @@ def test_refused_arm_returns_the_reasons_verbatim(peer: Any, make_link) -> None:
     assert _wait_event(seen, "statustext") is not None
 
 
+def _restart(p: Any, msg: Any) -> bool:
+    """A peer's answer to a reboot: acknowledged, then silent (no heartbeats)."""
+    if msg.get_type() == "COMMAND_LONG" and msg.command == 246:
+        p.heartbeats = False
+        p.ack(msg.command, mavlink2.MAV_RESULT_ACCEPTED)
+        return True
+    return False
+
+
 def test_an_accepted_reboot_takes_the_link_down_at_once(peer: Any, make_link) -> None:
     # The vehicle acknowledges, then goes silent while it restarts: a command sent in
     # that silence is answered at once as link-down, not sent to time out (what the
     # fuzz met: a LAND after a reboot got 504 "no COMMAND_ACK within 3 s").
-    def restart(p: Any, msg: Any) -> bool:
-        if msg.get_type() == "COMMAND_LONG" and msg.command == 246:
-            p.heartbeats = False
-            p.ack(msg.command, mavlink2.MAV_RESULT_ACCEPTED)
-            return True
-        return False
-
-    peer.responder = restart
+    peer.responder = _restart
     link = make_link(f"tcp:127.0.0.1:{peer.port}", heartbeat_timeout_s=30.0)
     assert _up(link)
     assert link.reboot().ok
@@ -213,18 +215,11 @@ def test_a_reboot_asked_a_second_into_a_boot_is_told_by_its_clock(peer: Any, mak
     # The e2e suite, loaded, rebooted the stand-in a second after its last boot: the
     # clock went back from ~1000 ms to a few ms, less than REBOOT_BACKSTEP_MS, and the
     # new boot was never counted (a page waited for it for a minute).
-    def restart(p: Any, msg: Any) -> bool:
-        if msg.get_type() == "COMMAND_LONG" and msg.command == 246:
-            p.heartbeats = False
-            p.ack(msg.command, mavlink2.MAV_RESULT_ACCEPTED)
-            return True
-        return False
-
     link = make_link(f"tcp:127.0.0.1:{peer.port}", heartbeat_timeout_s=30.0)
     assert _up(link)
     peer.send(mavlink2.MAVLink_attitude_message(1000, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0))
     assert link.wait_until(lambda t: t.vehicle_time_boot_ms == 1000, 20.0)
-    peer.responder = restart
+    peer.responder = _restart
     assert link.reboot().ok
     # the boot being left answers a last time, a message a few ms out of order: not
     # the new boot
