@@ -27,18 +27,15 @@ MAX_NOISE = 0.25  # of the contrast: noisier middles are texture, not paint (no 
 _ACROSS = np.linspace(-1.5, 1.5, 7)  # offsets across a stroke, in half stroke widths
 
 
-def _strokes_m(corners_m: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, float]]:
-    """(start, end, half width) of the left leg, right leg and crossbar's middles, in
-    the 12-corner order (corners 0, 1, 10, 11 are the left leg's, 4-7 the right's,
-    2, 3, 8, 9 the crossbar's inner corners)."""
-    c = corners_m
-
-    def stroke(a: int, b: int, d: int, e: int) -> tuple[np.ndarray, np.ndarray, float]:
-        # The middle runs from the mid-point of side (a, b) to that of side (d, e).
-        half = 0.25 * float(np.linalg.norm(c[b] - c[a]) + np.linalg.norm(c[e] - c[d]))
-        return 0.5 * (c[a] + c[b]), 0.5 * (c[d] + c[e]), half
-
-    return [stroke(0, 1, 11, 10), stroke(4, 5, 7, 6), stroke(2, 9, 3, 8)]
+def _strokes_m(corners_m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The starts (3 x 2), ends (3 x 2) and half widths (3) of the left leg's, right
+    leg's and crossbar's middles, in the 12-corner order (corners 0, 1, 10, 11 are
+    the left leg's, 4-7 the right's, 2, 3, 8, 9 the crossbar's inner corners): each
+    middle runs from the mid-point of side (a, b) to that of side (d, e)."""
+    c = np.asarray(corners_m, np.float64)
+    a, b, d, e = (np.array(i) for i in ((0, 4, 2), (1, 5, 9), (11, 7, 3), (10, 6, 8)))
+    half = 0.25 * (np.hypot(*(c[b] - c[a]).T) + np.hypot(*(c[e] - c[d]).T))
+    return 0.5 * (c[a] + c[b]), 0.5 * (c[d] + c[e]), half
 
 
 def stroke_samples(
@@ -53,27 +50,26 @@ def stroke_samples(
     points are board (not on the H or another painted mark); ``counts``: middle
     points per stroke.
     """
-    across, side_a, side_b, counts = [], [], [], []
-    for a, b, half in _strokes_m(corners_m):
-        ends = apply_h(H, np.array([a, b]))
-        length_m = max(float(np.linalg.norm(b - a)), 1e-12)
-        length_px = float(np.linalg.norm(ends[1] - ends[0]))
-        n = max(3, int(length_px / STEP_PX))
-        counts.append(n)
-        d = (b - a) / length_m
-        normal = np.array([-d[1], d[0]])
-        px_per_m = length_px / length_m
-        reach = half + max(1.5, half * px_per_m) / px_per_m
-        inset = min(half / length_m, 0.25)  # a stroke's blurred end is left out
-        t = (inset + (1 - 2 * inset) * np.linspace(0.0, 1.0, n))[:, None]
-        mids = a + t * (b - a)
-        # A reference drawn with thinner or bolder strokes than the pad in view
-        # puts its middles off the pad's: points across a stroke and a half.
-        across.append(mids[None] + (_ACROSS[:, None, None] * half) * normal)
-        side_a.append(mids + reach * normal)
-        side_b.append(mids - reach * normal)
-    paint_m = np.concatenate(across, axis=1)
-    sa, sb = np.concatenate(side_a), np.concatenate(side_b)
+    a, b, half = _strokes_m(corners_m)
+    ends = apply_h(H, np.vstack([a, b]))
+    length_m = np.maximum(np.hypot(*(b - a).T), 1e-12)
+    length_px = np.hypot(*(ends[3:] - ends[:3]).T)
+    counts = np.maximum(3, (length_px / STEP_PX).astype(np.int64))
+    d = (b - a) / length_m[:, None]
+    normal = np.column_stack([-d[:, 1], d[:, 0]])
+    px_per_m = length_px / length_m
+    reach = half + np.maximum(1.5, half * px_per_m) / px_per_m
+    inset = np.minimum(half / length_m, 0.25)  # a stroke's blurred end is left out
+    # Every stroke's middle points at once: point j of stroke i at t_j along it.
+    i = np.repeat(np.arange(3), counts)
+    u = np.arange(len(i)) - np.repeat(np.cumsum(counts) - counts, counts)
+    t = inset[i] + (1 - 2 * inset[i]) * (u / (counts[i] - 1))
+    mids = a[i] + t[:, None] * (b - a)[i]
+    # A reference drawn with thinner or bolder strokes than the pad in view
+    # puts its middles off the pad's: points across a stroke and a half.
+    paint_m = mids[None] + (_ACROSS[:, None, None] * half[i][:, None]) * normal[i]
+    sa = mids + reach[i][:, None] * normal[i]
+    sb = mids - reach[i][:, None] * normal[i]
     k, m = paint_m.shape[:2]
     px = apply_h(H, np.vstack([paint_m.reshape(-1, 2), sa, sb]))
     return (
@@ -82,14 +78,23 @@ def stroke_samples(
         px[k * m + m :],
         ~is_paint(sa),
         ~is_paint(sb),
-        tuple(counts),
+        tuple(int(n) for n in counts),
     )
 
 
 def _sample(image: np.ndarray, pts: np.ndarray) -> np.ndarray:
-    p = pts.reshape(-1, 2).astype(np.float32)
-    img = image if image.dtype == np.float32 else image.astype(np.float32)
-    out = cv2.remap(img, p[:, :1], p[:, 1:], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    p = pts.reshape(-1, 2)
+    # Only the pixels around the points are converted, not a whole frame per H (cut
+    # at the image's own edges, the crop's replicated border is the image's).
+    h, w = image.shape[:2]
+    seen = p[np.isfinite(p).all(axis=1)]
+    x0, y0, x1, y1 = 0, 0, w, h
+    if len(seen):
+        x0, y0 = np.clip(np.floor(seen.min(axis=0)) - 1, 0, [w - 1, h - 1]).astype(int)
+        x1, y1 = np.clip(np.ceil(seen.max(axis=0)) + 2, [x0 + 1, y0 + 1], [w, h]).astype(int)
+    crop = image[y0:y1, x0:x1].astype(np.float32)
+    q = (p - [x0, y0]).astype(np.float32)
+    out = cv2.remap(crop, q[:, :1], q[:, 1:], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
     return out.reshape(len(p), -1)
 
 
@@ -141,7 +146,7 @@ def _dip_and_noise(image: np.ndarray, weights, samples) -> tuple[float, float]:
     if contrast <= 0:
         return 1.0, 0.0
     counts = np.asarray(samples[5], np.int64)
-    steps = np.concatenate([np.diff(c) for c in np.split(centre, np.cumsum(counts)[:-1])])
+    steps = np.delete(np.diff(centre), np.cumsum(counts)[:-1] - 1)  # (within strokes)
     # A step between two points holds the noise of both: median |step| = 0.954 sigma.
     noise = float(np.median(np.abs(steps))) / 0.954 / contrast
     return _deepest_dip(centre, counts, contrast), noise

@@ -110,16 +110,17 @@ def compare(
     # Taken on the reference blurred as a camera's frame is, so that on a small view
     # they are the pixels that blur leaves pure (a board a few pixels wide between
     # the H and the pad's bars takes the paint's light a pixel out).
-    pick = _blurred(warped, seen, PICK_BLUR_PX * f)[..., 3]
-    low, high = np.percentile(pick[around], [5, 95])
+    pick = _blurred(warped[..., 3], seen, PICK_BLUR_PX * f)
+    low, high = _percentiles(pick[around], (5.0, 95.0))
     spread = high - low
     board = around & (pick <= low + 0.25 * spread)
     paint = near & (pick >= high - 0.25 * spread)
     if np.count_nonzero(board) < 8 or np.count_nonzero(paint) < 4:
         return Comparison(ncc, math.nan, math.nan, math.nan)
-    frame = _crop(frame_bgr, x0, y0, x1, y1, dsize)
-    b_f, b_r = np.median(frame[board], axis=0), np.median(warped[..., :3][board], axis=0)
-    p_f, p_r = np.median(frame[paint], axis=0), np.median(warped[..., :3][paint], axis=0)
+    # The frame's colours beside the reference's: one median per pixel set.
+    both = np.concatenate([_crop(frame_bgr, x0, y0, x1, y1, dsize), warped[..., :3]], axis=2)
+    b_f, b_r = np.split(_column_medians(both[board]), 2)
+    p_f, p_r = np.split(_column_medians(both[paint]), 2)
     return Comparison(ncc, _relative(b_f, p_f), _relative(b_r, p_r), _hue(b_f, b_r))
 
 
@@ -148,7 +149,7 @@ def pad_pattern(
     inside = _polygon_mask(outline_px - [x0, y0], dsize) & seen
     if np.count_nonzero(inside) < MIN_SIDE_PX * MIN_SIDE_PX:
         return math.nan
-    ch_ref = _blurred(warped, seen, FRAME_BLUR_PX)[..., 3]
+    ch_ref = _blurred(warped[..., 3], seen, FRAME_BLUR_PX)
     ch_frame = frame_channel[y0:y1, x0:x1].astype(np.float32)
     return _ncc(ch_frame[inside], ch_ref[inside])
 
@@ -177,15 +178,30 @@ def _warp(
     return warped, warped[..., 3] >= 0
 
 
-def _blurred(warped: np.ndarray, seen: np.ndarray, sigma: float) -> np.ndarray:
-    """``warped`` blurred by ``sigma`` pixels within the reference picture (what lies
-    outside it is no colour to blur in)."""
+def _blurred(channel: np.ndarray, seen: np.ndarray, sigma: float) -> np.ndarray:
+    """A warped channel blurred by ``sigma`` pixels within the reference picture (what
+    lies outside it is no colour to blur in)."""
     if sigma < 0.2:
-        return warped
+        return channel
     w = seen.astype(np.float32)
-    num = cv2.GaussianBlur(warped * w[..., None], (0, 0), sigma)
-    den = cv2.GaussianBlur(w, (0, 0), sigma)[..., None]
-    return np.where(seen[..., None], num / np.maximum(den, 1e-6), warped)
+    num = cv2.GaussianBlur(channel * w, (0, 0), sigma)
+    den = cv2.GaussianBlur(w, (0, 0), sigma)
+    return np.where(seen, num / np.maximum(den, 1e-6), channel)
+
+
+def _percentiles(values: np.ndarray, q: tuple[float, ...]) -> np.ndarray:
+    """``np.percentile(values, q)`` (linear), from one partial sort."""
+    n = len(values)
+    pos = np.asarray(q) / 100.0 * (n - 1)
+    lo = np.floor(pos).astype(np.intp)
+    hi = np.minimum(lo + 1, n - 1)
+    part = np.partition(values, np.union1d(lo, hi))
+    return part[lo] + (part[hi] - part[lo]) * (pos - lo)
+
+
+def _column_medians(rows: np.ndarray) -> np.ndarray:
+    """``np.median(rows, axis=0)``, the columns made contiguous first."""
+    return np.median(np.ascontiguousarray(rows.T), axis=1)
 
 
 def _crop(image: np.ndarray, x0: int, y0: int, x1: int, y1: int, dsize) -> np.ndarray:
