@@ -5,7 +5,9 @@
 - ``--design NAME|all``: per pad design (`pipeline.render.DESIGNS`), with a summary;
 - ``--sweep altitude|snr|tilt``: detection, pose error and time per point for
   Visland, ArUco and AprilTag 3 on the same poses, and range90 (`pipeline.bench.sweep`);
-- ``--report DIR``: the dissertation's experiments reproduced (`pipeline.bench.report`).
+- ``--report DIR``: the dissertation's experiments reproduced (`pipeline.bench.report`);
+- ``--vector``: the pose on frames drawn another way, the pad as vector polygons
+  (`pipeline.bench.vector`).
 
 One core (OpenCV and the BLAS on one thread, `pipeline.cores`; one torch thread); times
 are wall-clock per frame.

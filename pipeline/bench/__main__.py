@@ -38,6 +38,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--track", action="store_true", help="a descent over the pad, tracked frame to frame"
     )
+    parser.add_argument(
+        "--vector",
+        action="store_true",
+        help="the pose on frames drawn another way: the pad as vector polygons (1-6 m)",
+    )
     args = parser.parse_args(argv)
     if args.frames is not None and args.frames <= 0:
         parser.error("--frames must be positive")
@@ -57,6 +62,10 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _dispatch(args: argparse.Namespace, methods: list[str]) -> dict:
+    if args.vector:
+        from pipeline.bench.vector import run_vector
+
+        return run_vector(frames=args.frames or 150, seed=args.seed)
     if args.track:
         from pipeline.bench.track import run_track
 
