@@ -52,6 +52,12 @@ BARE_H_PX = 32.0  # the same for a dark H on a plain light board (`_framed_below
 # 5.5 (the check's bar: 3), while pads under a shadow's edge reached it standing out 1.5-2.8.
 SURE_EVIDENCE = 1.6
 MAX_HUE = 0.3  # the board's chromaticity, L1 distance to the reference's
+# Paint this bright (of 255) may have clipped, losing up to a third of its light: its
+# board may then read up to CLIPPED_GAIN times brighter against it than on the picture.
+# On the bench's views overexposed by a gain of 1.2-1.8, 388 of 400 pads were found
+# against 356 (the ICAO pad's dark board reads 0.3-0.45 of its clipped paint), and no
+# empty view was taken; an H painted on grass at 0.69 is not the ICAO pad (0.27).
+SATURATED_LUMA, CLIPPED_GAIN = 245.0, 1.5
 REJUDGE_BELOW_PX = 24.0  # marks smaller than this (frame pixels) are judged in every view
 
 
@@ -278,7 +284,12 @@ def _check(
     # Light that saturates the paint lifts the board's level against it; a pattern
     # that matches the reference's almost exactly around the H vouches for the board.
     tolerance = SURE_BOARD_TOLERANCE if seen.ncc >= SURE_NCC else BOARD_TOLERANCE
-    if abs(seen.board - seen.reference_board) > tolerance or seen.hue > MAX_HUE:
+    off = seen.board - seen.reference_board
+    if seen.paint >= SATURATED_LUMA and off > 0:
+        # Overexposed paint clips: brighter than it reads, it makes its board read
+        # brighter against it than it is (by up to the light it lost).
+        off = max(0.0, seen.board - CLIPPED_GAIN * seen.reference_board)
+    if abs(off) > tolerance or seen.hue > MAX_HUE:
         return "unframed"
     samples = stroke_samples(reference.corners_m, hit.fit.H, reference.is_paint)
     if cut_through(image, reference.projection.weights, samples):

@@ -45,12 +45,14 @@ class Comparison:
     board's luma over the brighter of the H's and the board's, in the frame and
     on the reference. ``hue``: L1 distance of the board's chromaticity (r, g, b
     summing to 1) between frame and reference, nan when either board is too
-    dark to have one. All nan when the patch is too small or off the frame."""
+    dark to have one. ``paint``: the H's luma in the frame (0-255). All nan when
+    the patch is too small or off the frame."""
 
     ncc: float
     board: float
     reference_board: float
     hue: float
+    paint: float = math.nan
 
 
 NOTHING = Comparison(math.nan, math.nan, math.nan, math.nan)
@@ -121,7 +123,8 @@ def compare(
     both = np.concatenate([_crop(frame_bgr, x0, y0, x1, y1, dsize), warped[..., :3]], axis=2)
     b_f, b_r = np.split(_column_medians(both[board]), 2)
     p_f, p_r = np.split(_column_medians(both[paint]), 2)
-    return Comparison(ncc, _relative(b_f, p_f), _relative(b_r, p_r), _hue(b_f, b_r))
+    board, reference_board = _relative(b_f, p_f), _relative(b_r, p_r)
+    return Comparison(ncc, board, reference_board, _hue(b_f, b_r), float(p_f @ _LUMA))
 
 
 def pad_pattern(
