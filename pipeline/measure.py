@@ -69,6 +69,7 @@ MARK_SIDE_PX = 4.0  # a mark's straight side shorter than this (a star's point) 
 # The whole pad's fit may move the H's corners this far (or 3 % of its span): an H of
 # 15 px fitted alone is off by up to a pixel and a half (its strokes are 2 px wide).
 MOVED_PX = 1.5
+AFFINE_MIN_SUPPORT = 0.2  # of the pad's edges, for a pose from the H's affine part
 HEADING_MARGIN = 0.05  # of the marks' edges: one half turn must find this many more
 _HALF_TURN = np.diag([-1.0, -1.0, 1.0])  # pad metres turned about the centre
 
@@ -120,25 +121,34 @@ def measure(
     # With the pad's other marks found, or a lens whose distortion the
     # homography cannot follow, the pose is refined on the edges.
     marks_found = whole is not Hv
-    polish = marks_found or cam.has_distortion
-    Hv, told = _heading(whole, reference, levels)
-    # The marks' points are measured only where the marks were found: placed by the
-    # H's homography alone they add no evidence, only a count that outweighs the attitude.
-    points_m = reference.pose_points_m if marks_found else reference.corners_m
-    fitted = _fit_pose(
-        reference,
-        levels,
-        cam,
-        Hv,
-        points_m,
-        polish=polish,
-        gravity=gravity,
-        enlarged=max(view.scale, 1.0),
-    )
-    if fitted is None:
-        return None
-    fit, support, ambiguous = fitted
-    return Measured(np.linalg.inv(view.matrix) @ Hv, fit, support, ambiguous, told)
+    starts: list[tuple[np.ndarray, bool, float | None]] = [(whole, marks_found, None)]
+    if gravity is not None:
+        # A small H's perspective is mostly its noise: JPEG blocks or a motion smear
+        # along its sides put the pad 30-50 degrees off level. When no pose fits, the
+        # attitude is left to tell the tilt, from the homography's affine part; the
+        # pose must then find the pad's edges (an H of other strokes painted on the
+        # floor leans as far, and is no pad).
+        affine = affine_part(Hv, reference.corners_m.mean(axis=0))
+        starts.append((affine, False, AFFINE_MIN_SUPPORT))
+    for start, with_marks, min_support in starts:
+        Hs, told = _heading(start, reference, levels)
+        # The marks' points are measured only where the marks were found: placed by the
+        # H's homography alone they add no evidence, only a count that outweighs the
+        # attitude.
+        fitted = _fit_pose(
+            reference,
+            levels,
+            cam,
+            Hs,
+            reference.pose_points_m if with_marks else reference.corners_m,
+            polish=with_marks or cam.has_distortion,
+            gravity=gravity,
+            enlarged=max(view.scale, 1.0),
+        )
+        if fitted is not None and (min_support is None or fitted[1] >= min_support):
+            fit, support, ambiguous = fitted
+            return Measured(np.linalg.inv(view.matrix) @ Hs, fit, support, ambiguous, told)
+    return None
 
 
 def pad_box_m(reference: Reference) -> np.ndarray:

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from pipeline import Camera, Reference, process_frame
@@ -29,3 +31,17 @@ def score_bench_frames(design_name: str, frames: tuple[int, ...], level: str = "
         res = process_frame(frame, reference, CAM, gravity_hint=g)
         tally.score(res.detected and res.pose is not None, res.pose, view, design.symmetric)
     return tally
+
+
+def bench_frames(design_name: str, seed: int, i: int, level: str, **changes):
+    """Frame ``i`` of the bench's views at ``level`` (seed ``seed``), with ``changes``
+    to the view (`pipeline.render.view.View` fields): its pad, its empty twin, the
+    attitude hint, the view and the design's reference."""
+    design = get_design(design_name)
+    reference = Reference.from_image(design.draw().image, design.size_m)
+    scenes = make_scenes(design, [seed, i // SCENE_EVERY], level, ())
+    view, noise_seed = make_view([seed, i, 7], CAM, design, level)
+    view = dataclasses.replace(view, **changes)
+    pad = render_view(scenes.pad, CAM, view, np.random.default_rng(noise_seed))
+    empty = render_view(scenes.empty, CAM, view, np.random.default_rng(noise_seed))
+    return pad, empty, gravity_hint(view.R_pad_cam, [seed, i, 11]), view, reference

@@ -9,10 +9,11 @@ import numpy as np
 import pytest
 
 from pipeline import Camera, Reference, process_frame
+from pipeline.bench.tally import Tally
 from pipeline.pose import TURN, pad_normal_in_camera, pose_to_vectors
-from pipeline.render import camera_rotation, make_pad_image, make_scene, render
+from pipeline.render import camera_rotation, get_design, make_pad_image, make_scene, render
 from pipeline.result import Pose
-from tests.pipeline.bench_support import score_bench_frames
+from tests.pipeline.bench_support import bench_frames, score_bench_frames
 
 CAM = Camera.from_fov(640, 480, 60.0)
 
@@ -116,3 +117,30 @@ def test_pixels_that_lean_the_pad_further_than_the_attitudes_error_weigh_less():
             tally.rot_deg,
             tally.pos_pct,
         )
+
+
+@pytest.mark.parametrize(
+    ("design", "i", "level", "changes"),
+    [
+        ("orange_ring", 16, "today", {"jpeg_quality": 59}),
+        ("orange_ring", 26, "today", {"jpeg_quality": 82}),
+        ("default", 20, "real", {}),
+    ],
+)
+def test_a_small_hs_bent_perspective_is_left_to_the_attitude(design, i, level, changes):
+    """An H of 37-60 px whose sides JPEG blocks or a motion smear bend: its homography
+    leans the pad 30-50 degrees off level; from its affine part, the attitude tells
+    the tilt and the pose finds the pad's edges."""
+    pad, _, hint, view, reference = bench_frames(design, 0, i, level, **changes)
+    res = process_frame(pad, reference, CAM, gravity_hint=hint)
+    assert res.detected and res.pose is not None, res.reason
+    tally = Tally()
+    tally.score(True, res.pose, view, get_design(design).symmetric)
+    assert tally.pos_pct[0] < 4.0 and tally.rot_deg[0] < 3.0, (tally.pos_pct, tally.rot_deg)
+
+
+def test_an_h_of_other_strokes_leaning_off_level_is_no_pad() -> None:
+    # The real-world mix's empty frame 15 of the paper pad: a thin dark H painted on
+    # grass; from its affine part it lies level, but the pad's edges are not there.
+    _, empty, hint, _, reference = bench_frames("paper_ring", 0, 15, "real")
+    assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected
