@@ -304,11 +304,12 @@ def _fit_pose(
     a prior, leaning no further from level than ``MAX_TILT_OFF_DEG``. Without
     it, the better fit wins, or on a tie the one nearer to looking straight
     down (as a hovering multirotor's camera does), and the pose is reported
-    ambiguous when the two differ. With the pad's other marks found
-    (``polish``), the pose then takes a few steps on all the pad's edges with
-    the camera model, whose 6 unknowns noise moves less than the homography's
-    8; kept when it finds at least as many of the edges (and, with the
-    attitude, on a pad large enough to show its tilt, staying level).
+    ambiguous when the two differ, or when its points hardly show its tilt.
+    With the pad's other marks found (``polish``), the pose then takes a few
+    steps on all the pad's edges with the camera model, whose 6 unknowns noise
+    moves less than the homography's 8; kept when it finds at least as many of
+    the edges (and, with the attitude, on a pad large enough to show its tilt,
+    staying level).
     Returns the fit, the share of the whole pad's edges found where the pose
     puts them, and whether it is ambiguous.
     """
@@ -359,6 +360,10 @@ def _fit_pose(
         cands.sort(key=functools.cmp_to_key(lambda a, b: -1 if _better(a, b) else 1))
         rms, _, rvec, tvec = cands[0]
         ambiguous = len(cands) > 1 and _tie(cands[0], cands[1]) and _apart(cands[0], cands[1])
+        # Points that show the tilt by under NOISE_SHOWN px a radian leave it to their
+        # noise alone by 4 degrees and more (an H with no mark found, 20-50 px): on the
+        # bench's views such poses were up to 34 degrees off with no tie to tell.
+        ambiguous |= _tilt_shown(px, cam, enlarged) < NOISE_SHOWN_PX_PER_RAD
         fit = EdgeFit(rvec, tvec, rms, len(pts_m), 0)
     support = edge_support(levels, reference.edge_model, cam, fit.rvec, fit.tvec)
     if polish and (gravity is None or shown >= POLISH_SHOWN_PX_PER_RAD):

@@ -30,8 +30,9 @@ class Pose:
     fit the frame equally well (the pad looks the same after a 180 degree turn, or
     the marks that tell its heading were not seen in this frame); ``yaw_hint``
     decides between them. ``ambiguous``: the pixels fit another
-    pose, tilted the other way, as well as this one (a small pad seen nearly
-    head on, with no ``gravity_hint`` to tell them apart).
+    pose, tilted the other way, as well as this one, or show the tilt too little
+    to tell it within a few degrees (a small pad seen nearly head on, an H with
+    no other mark found, with no ``gravity_hint`` to tell them apart).
     """
 
     position_m: np.ndarray

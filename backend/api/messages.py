@@ -35,8 +35,8 @@ class Pose(Model):
     reprojection_px: float
     symmetric: bool
     ambiguous: bool = Field(
-        description="another pose, tilted the other way, fits the pixels as well "
-        "(no attitude to tell them apart)"
+        description="another pose, tilted the other way, fits the pixels as well, or "
+        "they show the tilt too little to tell it (no attitude to tell them apart)"
     )
 
 

@@ -144,3 +144,14 @@ def test_an_h_of_other_strokes_leaning_off_level_is_no_pad() -> None:
     # grass; from its affine part it lies level, but the pad's edges are not there.
     _, empty, hint, _, reference = bench_frames("paper_ring", 0, 15, "real")
     assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected
+
+
+def test_a_tilt_the_h_alone_hardly_shows_is_flagged_without_the_hint() -> None:
+    # The bench's red_on_black frame 16: 9 m up, its thin rings not found, the H's
+    # corners move 1.5 px a radian of tilt; IPPE's better fit is 34 degrees off.
+    pad, _, hint, view, reference = bench_frames("red_on_black", 0, 16, "today")
+    blind = process_frame(pad, reference, CAM)
+    assert blind.detected and blind.pose is not None and blind.pose.ambiguous
+    hinted = process_frame(pad, reference, CAM, gravity_hint=hint)
+    assert hinted.pose is not None and not hinted.pose.ambiguous
+    assert rotation_error_deg(hinted.pose, view.R_pad_cam) < 3.0

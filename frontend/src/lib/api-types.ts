@@ -1885,7 +1885,7 @@ export interface components {
             R_pad_cam: number[][];
             /**
              * Ambiguous
-             * @description another pose, tilted the other way, fits the pixels as well (no attitude to tell them apart)
+             * @description another pose, tilted the other way, fits the pixels as well, or they show the tilt too little to tell it (no attitude to tell them apart)
              */
             ambiguous: boolean;
             /** Position M */
