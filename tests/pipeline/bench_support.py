@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 
@@ -20,16 +21,12 @@ CAM = Camera.from_fov(640, 480, 60.0)
 def score_bench_frames(design_name: str, frames: tuple[int, ...], level: str = "today") -> Tally:
     """The bench's frames ``frames`` of ``design_name`` at degradation ``level``, run
     with the attitude hint and scored as the bench scores them."""
-    design = get_design(design_name)
-    reference = Reference.from_image(design.draw().image, design.size_m)
+    symmetric = get_design(design_name).symmetric
     tally = Tally()
     for i in frames:
-        scenes = make_scenes(design, [0, i // SCENE_EVERY], level, ())
-        view, noise_seed = make_view([0, i, 7], CAM, design, level)
-        frame = render_view(scenes.pad, CAM, view, np.random.default_rng(noise_seed))
-        g = gravity_hint(view.R_pad_cam, [0, i, 11])
+        frame, _, g, view, reference = bench_frames(design_name, 0, i, level)
         res = process_frame(frame, reference, CAM, gravity_hint=g)
-        tally.score(res.detected and res.pose is not None, res.pose, view, design.symmetric)
+        tally.score(res.detected and res.pose is not None, res.pose, view, symmetric)
     return tally
 
 
@@ -38,10 +35,16 @@ def bench_frames(design_name: str, seed: int, i: int, level: str, **changes):
     to the view (`pipeline.render.view.View` fields): its pad, its empty twin, the
     attitude hint, the view and the design's reference."""
     design = get_design(design_name)
-    reference = Reference.from_image(design.draw().image, design.size_m)
     scenes = make_scenes(design, [seed, i // SCENE_EVERY], level, ())
     view, noise_seed = make_view([seed, i, 7], CAM, design, level)
     view = dataclasses.replace(view, **changes)
     pad = render_view(scenes.pad, CAM, view, np.random.default_rng(noise_seed))
     empty = render_view(scenes.empty, CAM, view, np.random.default_rng(noise_seed))
-    return pad, empty, gravity_hint(view.R_pad_cam, [seed, i, 11]), view, reference
+    hint = gravity_hint(view.R_pad_cam, [seed, i, 11])
+    return pad, empty, hint, view, _reference(design_name)
+
+
+@functools.lru_cache(maxsize=4)
+def _reference(design_name: str) -> Reference:
+    design = get_design(design_name)
+    return Reference.from_image(design.draw().image, design.size_m)
