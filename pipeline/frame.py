@@ -46,7 +46,9 @@ from pipeline.result import FrameResult
 from pipeline.shapes import Region
 from pipeline.view import MAX_ENLARGEMENT, View, enlargement
 
-FALLBACK_METHOD = "shadow"  # tried when the default threshold finds nothing
+# Tried in turn when the default threshold finds nothing: thresholds that hold across
+# shadows (see `pipeline.preprocess`).
+FALLBACK_METHODS = ("shadow", "tophat")
 TRACK_SPAN_PX = 100.0  # a tracked H is looked for at a scale where it spans about this
 FAR_SEARCH_WIDTH_PX = 2560  # the last search: narrower frames enlarged toward it (view.py)
 TRACK_REACH = 0.5  # the tracking window: the pad's last box grown by this much of its size
@@ -144,11 +146,11 @@ def process_frame(
                 measured, reference, outline, yaw_hint, "follow", mask, stages, t_start
             )
     # Then searched for: around the last detection, then the whole frame, then the
-    # whole frame again with the threshold that holds across shadows.
+    # whole frame again with the thresholds that hold across shadows.
     tries = [("track", _tracking_view(prior, reference, image.shape), method)]
     tries.append(("search", search_view, method))
     if method == DEFAULT_METHOD:
-        tries.append(("search", search_view, FALLBACK_METHOD))
+        tries += [("search", search_view, fallback) for fallback in FALLBACK_METHODS]
     # A far pad: too small at the search's width, searched at the camera's own
     # resolution before giving up (native frames buy range), enlarged: a leg of
     # 2-3 px keeps its shape and corners only interpolated (on 1280 x 720 frames,

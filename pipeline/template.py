@@ -10,7 +10,9 @@ the frame by the located homography, around the H, and compared in two ways:
   small to find the pad's other marks by their edges.
 - board: the colour of the board around the H, out to a good part of the H's
   size, against the reference's at the same places: its brightness relative
-  to the H's (or to the board's own, whichever is brighter) and its hue. The
+  to the H's paint nearest it (or to its own, whichever is brighter) and its
+  hue. Read pixel by pixel against the nearest paint, the brightness holds
+  under a shadow across the pad, which dims board and paint alike. The
   same H painted on a floor, or cut out of another pad, has floor around it:
   grass, asphalt, tiles, not the pad's black paint or orange fabric. Printing
   and light change the H's own shade far more than the board's relation to
@@ -32,21 +34,25 @@ BOARD_REACH = 0.4  # board: out to this much of the H's size around its bounding
 MIN_SIDE_PX = 6  # frame patches smaller than this are not compared
 MAX_SIDE_PX = 96  # larger ones are compared at this size
 DARK_LUMA = 40.0  # a board this dark has no reliable hue
+MAX_HUE_PIXELS = 1024  # the board's hue: its median over at most this many of its pixels
 # A camera's pixel integrates light: the reference warped point by point is sharper
 # than any frame, which matters to a pattern a few pixels across.
 FRAME_BLUR_PX = 0.6
 PICK_BLUR_PX = 1.0  # where the board's and the H's levels are read: pixels this blur leaves pure
+PAIR_BLUR_PX = 1.0  # the levels read pixel by pixel, smoothed this much for the noise
 _LUMA = np.array([0.114, 0.587, 0.299])
+# BGR BGR -> luma luma: the frame's and the reference's side by side.
+_LUMA_PAIR = np.kron(np.eye(2), _LUMA[:, None]).astype(np.float32)
 
 
 @dataclass(frozen=True)
 class Comparison:
     """``ncc``: pattern correlation (-1..1). ``board``/``reference_board``: the
-    board's luma over the brighter of the H's and the board's, in the frame and
-    on the reference. ``hue``: L1 distance of the board's chromaticity (r, g, b
-    summing to 1) between frame and reference, nan when either board is too
-    dark to have one. ``paint``: the H's luma in the frame (0-255). All nan when
-    the patch is too small or off the frame."""
+    board's luma over the brighter of it and the H's paint nearest it (median
+    over the board), in the frame and on the reference. ``hue``: L1 distance of
+    the board's chromaticity (r, g, b summing to 1) between frame and reference,
+    nan when either board is too dark to have one. ``paint``: the H's luma in the
+    frame (0-255). All nan when the patch is too small or off the frame."""
 
     ncc: float
     board: float
@@ -119,12 +125,18 @@ def compare(
     paint = near & (pick >= high - 0.25 * spread)
     if np.count_nonzero(board) < 8 or np.count_nonzero(paint) < 4:
         return Comparison(ncc, math.nan, math.nan, math.nan)
-    # The frame's colours beside the reference's: one median per pixel set.
-    both = np.concatenate([_crop(frame_bgr, x0, y0, x1, y1, dsize), warped[..., :3]], axis=2)
-    b_f, b_r = np.split(_column_medians(both[board]), 2)
-    p_f, p_r = np.split(_column_medians(both[paint]), 2)
-    board, reference_board = _relative(b_f, p_f), _relative(b_r, p_r)
-    return Comparison(ncc, board, reference_board, _hue(b_f, b_r), float(p_f @ _LUMA))
+    # The frame's colours beside the reference's: one median per pixel set (the
+    # board's brightness, pixel by pixel).
+    frame_crop = _crop(frame_bgr, x0, y0, x1, y1, dsize)
+    both = np.concatenate([frame_crop, warped[..., :3]], axis=2)
+    pixels, on_board = both.reshape(-1, 6), np.flatnonzero(board)
+    b_f, b_r = np.split(_column_medians(pixels[on_board[:: _stride(len(on_board))]]), 2)
+    p_f = _column_medians(pixels[np.flatnonzero(paint), :3])
+    lumas = _blurred(both @ _LUMA_PAIR, seen, PAIR_BLUR_PX)  # the frame's, the reference's
+    level, reference_level = _paired_relative(
+        lumas.reshape(-1, 2), on_board, _nearest_paint(board, paint)
+    )
+    return Comparison(ncc, level, reference_level, _hue(b_f, b_r), float(p_f @ _LUMA))
 
 
 def pad_pattern(
@@ -182,13 +194,17 @@ def _warp(
 
 
 def _blurred(channel: np.ndarray, seen: np.ndarray, sigma: float) -> np.ndarray:
-    """A warped channel blurred by ``sigma`` pixels within the reference picture (what
-    lies outside it is no colour to blur in)."""
+    """A warped channel (or channels, H x W x C) blurred by ``sigma`` pixels within the
+    reference picture (what lies outside it is no colour to blur in)."""
     if sigma < 0.2:
         return channel
+    if seen.all():  # (the weights all one: a plain blur)
+        return cv2.GaussianBlur(channel, (0, 0), sigma)
     w = seen.astype(np.float32)
-    num = cv2.GaussianBlur(channel * w, (0, 0), sigma)
     den = cv2.GaussianBlur(w, (0, 0), sigma)
+    if channel.ndim == 3:  # (channels side by side)
+        w, den, seen = w[..., None], den[..., None], seen[..., None]
+    num = cv2.GaussianBlur(channel * w, (0, 0), sigma)
     return np.where(seen, num / np.maximum(den, 1e-6), channel)
 
 
@@ -231,9 +247,30 @@ def _ncc(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.dot(a, b) / den) if den > 1e-9 else math.nan
 
 
-def _relative(board_bgr: np.ndarray, paint_bgr: np.ndarray) -> float:
-    b, p = float(board_bgr @ _LUMA), float(paint_bgr @ _LUMA)
-    return b / max(b, p, 1.0)
+def _nearest_paint(board: np.ndarray, paint: np.ndarray) -> np.ndarray:
+    """For each board pixel (raster order), the flat index of the paint pixel nearest it."""
+    _, labels = cv2.distanceTransformWithLabels(
+        (~paint).astype(np.uint8), cv2.DIST_L2, 3, labelType=cv2.DIST_LABEL_PIXEL
+    )
+    return np.flatnonzero(paint)[labels[board] - 1]
+
+
+def _paired_relative(
+    lumas: np.ndarray, board: np.ndarray, nearest: np.ndarray
+) -> tuple[float, float]:
+    """The board's luma over the brighter of it and the paint nearest it, median over
+    the board, in the frame and on the reference (``lumas``: pixels x 2; ``board``
+    and ``nearest``: pixel indices): a shadow across the pad darkens a board pixel
+    and its paint alike."""
+    b, p = lumas.T[:, board], lumas.T[:, nearest]
+    ratios = b / np.maximum(np.maximum(b, p), 1.0)
+    frame, picture = np.median(ratios, axis=1)
+    return float(frame), float(picture)
+
+
+def _stride(count: int) -> int:
+    """A step through ``count`` pixels that reads at most MAX_HUE_PIXELS of them."""
+    return max(1, -(-count // MAX_HUE_PIXELS))
 
 
 def _hue(frame_bgr: np.ndarray, ref_bgr: np.ndarray) -> float:

@@ -44,6 +44,25 @@ def test_the_shadow_threshold_keeps_a_stroke_whole_across_a_shadow():
     assert mask[60, 40] == 0 and mask[60, 120] == 0
 
 
+def test_the_tophat_threshold_marks_a_stroke_in_a_narrow_shadow_band_and_not_its_rim():
+    # A white stroke on a board, a band 20 px wide (narrower than the local mean's
+    # block) taking 65 % of the light across it: the local means lose the stroke in
+    # the band ("adaptive") or mark the sunlit board along the band ("shadow"), which
+    # joins the stroke to the band's rim; against the light's opening, the stroke
+    # alone is paint.
+    img = np.full((120, 160), 60.0)
+    img[20:100, 75:85] = 230
+    img[50:70, :] *= 0.35
+    noisy = img + np.random.default_rng(0).normal(0, 3, img.shape)
+    frame = np.clip(noisy, 0, 255).astype(np.uint8)
+    rim = (slice(45, 50), slice(20, 60))
+    assert binarize(frame, "adaptive").mask[60, 80] == 0
+    assert binarize(frame, "shadow").mask[rim].any()
+    mask = binarize(frame, "tophat").mask
+    assert mask[60, 80] == 255 and mask[30, 80] == 255
+    assert not mask[rim].any() and not mask[52:68, 20:60].any()
+
+
 def test_seed_threshold_fails_under_dim_light_where_otsu_holds():
     # The seed's 85 % global threshold is tuned for one exposure: dim the scene
     # and the white paint falls below it, while Otsu adapts.
