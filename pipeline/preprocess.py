@@ -3,7 +3,7 @@
 Frames are turned into one channel in which the reference's H is bright (its
 learned colour projection, ``pipeline.colour``: plain BT.601 gray for the
 seed's white H on a dark board, inverted gray for a dark H on paper, a colour
-axis for a white H on an orange disc). Three thresholding methods, all selectable:
+axis for a white H on an orange disc). Five thresholding methods, all selectable:
 
 ``"seed"``
     The dissertation's chain (section 4.1.1): BT.601 gray, a 3x3 Laplacian
@@ -48,6 +48,12 @@ from pipeline.colour import GRAY, Projection
 METHODS = ("adaptive", "otsu", "seed", "shadow", "tophat")
 DEFAULT_METHOD = "adaptive"
 WORK_WIDTH = 640  # the seed's working resolution: 640 x 480
+# "tophat": the opening's square (as wide as "adaptive"'s block), and how far above it
+# paint stands, in `_log_light` levels (46 an e-fold): 16 is 41 % brighter. On the
+# bench's views with a shadow across the pad (10 designs, 160 views), tried after
+# "shadow", 135 pads were found against 121; 12 and 22 found 132 and 134, squares
+# of 31 and 61 px 136 and 132.
+TOPHAT_SIDE_PX, TOPHAT_RISE = 41, 16
 
 
 def check_image(image: object, name: str = "image_bgr") -> np.ndarray:
@@ -161,14 +167,6 @@ def _log_table(dark: bool) -> np.ndarray:
 
 
 _LOG_LIGHT, _LOG_DARK = _log_table(False), _log_table(True)
-
-
-# "tophat": the opening's square (as wide as "adaptive"'s block), and how far above it
-# paint stands, in `_log_light` levels (46 an e-fold): 16 is 41 % brighter. On the
-# bench's views with a shadow across the pad (10 designs, 160 views), tried after
-# "shadow", 135 pads were found against 121; 12 and 22 found 132 and 134, squares
-# of 31 and 61 px 136 and 132.
-TOPHAT_SIDE_PX, TOPHAT_RISE = 41, 16
 
 
 def _smooth(channel: np.ndarray) -> np.ndarray:
