@@ -84,7 +84,7 @@ def border_pixels(image: np.ndarray, width: int) -> np.ndarray:
 
 
 def subsample(image: np.ndarray, max_width: int = WORK_WIDTH) -> tuple[np.ndarray, float]:
-    """Shrink ``image`` to at most ``max_width`` columns (area interpolation).
+    """Shrink ``image`` to at most ``max_width`` columns (`shrink`).
 
     Returns the image and the scale factor (work pixels per input pixel).
     """
@@ -93,7 +93,32 @@ def subsample(image: np.ndarray, max_width: int = WORK_WIDTH) -> tuple[np.ndarra
         return image, 1.0
     scale = max_width / width
     height = max(1, round(image.shape[0] * scale))
-    return cv2.resize(image, (max_width, height), interpolation=cv2.INTER_AREA), scale
+    return shrink(image, (max_width, height)), scale
+
+
+def shrink(image: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """``image`` resized down to ``size`` (width, height), pixel centres kept as
+    cv2.resize keeps them: halved (the mean of each 2 x 2 block) while it is still at
+    least twice the size, then the rest (under a factor 2) interpolated linearly.
+
+    Area interpolation does the same in one step, but at a factor that is not a
+    whole number it cost 3 ms on a 1000 px square crop of a 1920 x 1080 frame; the
+    halvings and the last step, 0.5 ms."""
+    w, h = size
+    img, factor, padded = image, 1, False
+    while img.shape[1] >= 2 * w and img.shape[0] >= 2 * h:
+        rows, cols = img.shape[:2]
+        if rows % 2 or cols % 2:  # (a whole block at the far edge: its copy)
+            img = cv2.copyMakeBorder(img, 0, rows % 2, 0, cols % 2, cv2.BORDER_REPLICATE)
+            padded = True
+        img = cv2.resize(img, (img.shape[1] // 2, img.shape[0] // 2), interpolation=cv2.INTER_AREA)
+        factor *= 2
+    if not padded:
+        return cv2.resize(img, size, interpolation=cv2.INTER_LINEAR)
+    # The halved image reaches past the image's far edge: map its pixels explicitly.
+    sx, sy = factor * w / image.shape[1], factor * h / image.shape[0]
+    M = np.array([[sx, 0.0, 0.5 * sx - 0.5], [0.0, sy, 0.5 * sy - 0.5]])
+    return cv2.warpAffine(img, M, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
 
 
 def to_gray(image_bgr: np.ndarray) -> np.ndarray:

@@ -16,6 +16,7 @@ import cv2
 import numpy as np
 
 from pipeline.camera import Camera
+from pipeline.preprocess import shrink
 
 MAX_ENLARGEMENT = 2.0  # interpolating further adds cost, not shape: a leg needs 4-6 px
 
@@ -56,7 +57,12 @@ class View:
         y1 = min(h, math.ceil(box[3] + grow) + 1)
         if x1 - x0 < 16 or y1 - y0 < 16:
             return None
-        return cls(x0, y0, x1, y1, float(min(max_scale, max(scale, 16.0 / min(x1 - x0, y1 - y0)))))
+        scale = float(min(max_scale, max(scale, 16.0 / min(x1 - x0, y1 - y0))))
+        if scale < 0.5:  # sides that halve evenly (`shrink`): a few pixels more room
+            step = 2 ** (math.floor(math.log2(1.0 / scale)) + 1)
+            x0, x1 = _aligned(x0, x1, w, step)
+            y0, y1 = _aligned(y0, y1, h, step)
+        return cls(x0, y0, x1, y1, scale)
 
     @classmethod
     def whole(cls, frame_shape: tuple[int, ...], max_width: int) -> View:
@@ -93,11 +99,20 @@ class View:
         crop = frame[self.y0 : self.y1, self.x0 : self.x1]
         if self.size == (crop.shape[1], crop.shape[0]):
             return crop
-        how = cv2.INTER_AREA if self.scale < 1.0 else cv2.INTER_CUBIC
-        return cv2.resize(crop, self.size, interpolation=how)
+        if self.scale < 1.0:
+            return shrink(crop, self.size)
+        return cv2.resize(crop, self.size, interpolation=cv2.INTER_CUBIC)
 
     def camera(self, camera: Camera) -> Camera:
         """The frame's camera (``camera`` at the frame's size) for this view."""
         cam = camera.cropped(self.x0, self.y0, self.x1 - self.x0, self.y1 - self.y0)
         w, h = self.size
         return cam if (w, h) == (cam.width, cam.height) else cam.scaled(w, h)
+
+
+def _aligned(lo: int, hi: int, limit: int, step: int) -> tuple[int, int]:
+    """[lo, hi) grown to a multiple of ``step`` long, within [0, limit) where it fits."""
+    hi = lo + -(-(hi - lo) // step) * step
+    if hi > limit:
+        lo, hi = max(0, lo - (hi - limit)), limit
+    return lo, hi

@@ -1,7 +1,9 @@
+import cv2
 import numpy as np
 import pytest
 
-from pipeline.preprocess import METHODS, binarize, check_image, subsample, to_gray
+from pipeline.preprocess import METHODS, binarize, check_image, shrink, subsample, to_gray
+from pipeline.view import View
 
 
 def test_gray_is_bt601_luma():
@@ -19,6 +21,47 @@ def test_subsample_to_640_wide_keeps_aspect():
     assert scale == pytest.approx(640 / 2592)
     same, s = subsample(np.zeros((480, 640, 3), np.uint8))
     assert s == 1.0 and same.shape == (480, 640, 3)
+
+
+# Frame sides odd and even, factors from under 2 (no halving) to 8 (three).
+@pytest.mark.parametrize(
+    "src, dst", [((1000, 900), (350, 315)), ((999, 901), (130, 117)), ((640, 480), (512, 384)),
+                 ((1921, 1081), (640, 360)), ((1920, 1080), (240, 135))],
+)  # fmt: skip
+def test_shrink_keeps_pixel_centres_where_a_resize_puts_them(src, dst):
+    (w, h), (dw, dh) = src, dst
+    ramp = np.tile(np.arange(w, dtype=np.float32), (h, 1))
+    out = shrink(ramp, dst)
+    assert out.shape == (dh, dw)
+    # view pixel u shows frame pixel (u + 0.5) * w / dw - 0.5 (away from the edges)
+    expect = (np.arange(dw) + 0.5) * w / dw - 0.5
+    assert np.abs(out[dh // 2, 2:-2] - expect[2:-2]).max() < 1e-3
+
+
+def test_shrink_by_a_whole_power_of_two_is_the_block_mean():
+    rng = np.random.default_rng(0)
+    img = rng.integers(0, 256, (96, 128, 3)).astype(np.float32)
+    out = shrink(img, (32, 24))
+    blocks = img.reshape(24, 4, 32, 4, 3).mean(axis=(1, 3))
+    assert np.abs(out - blocks).max() < 1e-3
+    # and on uint8 within a level of the area interpolation's
+    img8 = img.astype(np.uint8)
+    area = cv2.resize(img8, (32, 24), interpolation=cv2.INTER_AREA).astype(int)
+    assert np.abs(shrink(img8, (32, 24)).astype(int) - area).max() <= 1
+
+
+def test_a_shrunk_view_halves_evenly_and_stays_in_the_frame():
+    for box, scale in (([700.0, 300.0, 1613.0, 1009.0], 0.3), ([5.0, 7.0, 1915.0, 1077.0], 0.13)):
+        view = View.around(np.array(box), (1080, 1920, 3), 11.0, scale)
+        assert view is not None and view.scale == scale
+        w, h = view.x1 - view.x0, view.y1 - view.y0
+        step = 2 ** (int(np.floor(np.log2(1 / scale))) + 1)
+        assert w % step == 0 and h % step == 0
+        # the box grown by 11 px, clipped to the frame, is all in view
+        assert max(0, box[0] - 11) >= view.x0 >= 0 and max(0, box[1] - 11) >= view.y0 >= 0
+        assert min(1920, box[2] + 11) <= view.x1 <= 1920
+        assert min(1080, box[3] + 11) <= view.y1 <= 1080
+        assert view.image(np.zeros((1080, 1920, 3), np.uint8)).shape[:2] == view.size[::-1]
 
 
 # "shadow" marks a wide patch's rim, not its middle (its local mean is the
