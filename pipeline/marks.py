@@ -35,15 +35,21 @@ class Mark:
 
     corners_m: np.ndarray
     bright: bool
+    rim: bool = False  # the board's outer edge: the floor lies beyond it
 
     def to_dict(self) -> dict:
-        return {"corners_m": self.corners_m.tolist(), "bright": bool(self.bright)}
+        return {
+            "corners_m": self.corners_m.tolist(),
+            "bright": bool(self.bright),
+            "rim": bool(self.rim),
+        }
 
 
 def find_marks(
     smooth: np.ndarray, level: float, board_level: float, h_region: np.ndarray
-) -> list[tuple[np.ndarray, bool]]:
-    """Polygons (picture pixels) of the marks on a smoothed channel, with their brightness.
+) -> list[tuple[np.ndarray, bool, bool]]:
+    """Polygons (picture pixels) of the marks on a smoothed channel, with their brightness
+    and whether each is the board's rim.
 
     ``level``: half-way between the H's paint and its board; ``board_level``:
     the board's. Boundaries of the paint-coloured regions other than the H
@@ -52,7 +58,7 @@ def find_marks(
     """
     h, w = smooth.shape
     area = float(h * w)
-    out: list[tuple[float, np.ndarray, bool]] = []
+    out: list[tuple[float, np.ndarray, bool, bool]] = []  # area, polygon, bright, rim
     paint = (smooth > level).astype(np.uint8)
     # Every paint region that touches the H is the H (the H was found at
     # another threshold than this one).
@@ -60,7 +66,7 @@ def find_marks(
     h_labels = np.unique(labels[h_region & (paint > 0)])
     others = paint.copy()
     others[np.isin(labels, h_labels[h_labels > 0]) | h_region] = 0
-    out += _boundaries(others, smooth, area, bright_inside=True)
+    out += [(*b, False) for b in _boundaries(others, smooth, area, bright_inside=True)]
     # What lies beyond the board (a floor around a disc, the paper around a
     # card) is told by the picture's rim.
     rim = np.concatenate([smooth[0], smooth[-1], smooth[:, 0], smooth[:, -1]]).astype(float)
@@ -70,8 +76,14 @@ def find_marks(
         cut = 0.5 * (beyond + board_level)
         board = (smooth < cut) if beyond > board_level else (smooth > cut)
         board = board.astype(np.uint8)
+        on_board = paint
+        if (beyond > board_level) == (level > board_level):
+            # A floor as light as the paint (a grey floor around a black disc, on a red
+            # channel) is no mark on the board: the paint that reaches the picture's
+            # edge is left out, or the board would run into the floor.
+            on_board = _off_the_edge(paint)
         # The board component around the H, holes filled: its outer edge is the pad's rim.
-        _, labels = cv2.connectedComponents(board | (paint > 0) | h_region.astype(np.uint8))
+        _, labels = cv2.connectedComponents(board | on_board | h_region.astype(np.uint8))
         ys, xs = np.nonzero(h_region)
         k = int(np.bincount(labels[ys, xs]).argmax())
         if k > 0:
@@ -80,15 +92,35 @@ def find_marks(
             # A disc cropped to its width touches the picture's edge at four
             # points; a board that runs along it has no rim in the picture.
             if np.mean(edge) < 0.1:
-                out += _boundaries(
+                rims = _boundaries(
                     comp, smooth, area, bright_inside=beyond < board_level, holes=False, rim=True
                 )
+                # (a floor all round the board made its rim a hole's outline already)
+                out += [(*r, True) for r in rims if not any(_same_outline(r, o[:3]) for o in out)]
     elif abs(beyond - board_level) < 0.25 * step:
         # The board fills the picture to its edge: the edge is the board's rim.
         rect = np.array([[-0.5, -0.5], [w - 0.5, -0.5], [w - 0.5, h - 0.5], [-0.5, h - 0.5]])
-        out.append((area, rect, False))
+        out.append((area, rect, False, True))
     out.sort(key=lambda item: -item[0])
-    return [(poly, bright) for _, poly, bright in out[:MAX_MARKS]]
+    return [(poly, bright, rim) for _, poly, bright, rim in out[:MAX_MARKS]]
+
+
+def _same_outline(a: tuple[float, np.ndarray, bool], b: tuple[float, np.ndarray, bool]) -> bool:
+    """Whether two (area, polygon, bright) outlines are one: alike in brightness and
+    area, about the same centre (within a pixel and 2 % of the size)."""
+    if a[2] != b[2] or abs(a[0] - b[0]) > 0.02 * max(a[0], b[0]):
+        return False
+    size = float(np.sqrt(max(a[0], b[0])))
+    return bool(np.hypot(*(a[1].mean(axis=0) - b[1].mean(axis=0))) <= 1.0 + 0.02 * size)
+
+
+def _off_the_edge(mask: np.ndarray) -> np.ndarray:
+    """``mask`` without its components that touch the picture's edge."""
+    _, labels = cv2.connectedComponents(mask)
+    edge = np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])
+    out = mask.copy()
+    out[np.isin(labels, np.unique(edge[edge > 0]))] = 0
+    return out
 
 
 def _boundaries(

@@ -81,14 +81,16 @@ class Reference:
     def edge_model(self) -> EdgeModel:
         """Every side of the pad: the H's and its other marks'."""
         polys = [(self.corners_m, True)] + [(m.corners_m, m.bright) for m in self.marks]
-        return EdgeModel.from_polygons(polys)
+        rims = [k + 1 for k, m in enumerate(self.marks) if m.rim]
+        return EdgeModel.from_polygons(polys, rims=rims)
 
     @cached_property
     def marks_model(self) -> EdgeModel | None:
         """The sides of the marks alone (None when the pad has none)."""
         if not self.marks:
             return None
-        return EdgeModel.from_polygons([(m.corners_m, m.bright) for m in self.marks])
+        rims = [k for k, m in enumerate(self.marks) if m.rim]
+        return EdgeModel.from_polygons([(m.corners_m, m.bright) for m in self.marks], rims=rims)
 
     @cached_property
     def board_is_outline(self) -> bool:
@@ -246,8 +248,8 @@ class Reference:
         to_m = _pixels_to_metres(ww, wh, pad_size_m)
         corners_m = to_m(h_poly)
         marks = tuple(
-            Mark(to_m(poly), bright)
-            for poly, bright in find_marks(smooth, level, board_level, region)
+            Mark(to_m(poly), bright, rim)
+            for poly, bright, rim in find_marks(smooth, level, board_level, region)
         )
         contour = _outer_contour(region)
         mom = shape_moments(contour)

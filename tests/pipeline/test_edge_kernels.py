@@ -87,3 +87,27 @@ def test_fit_homography_recovers_a_drawn_h_and_support_finds_its_sides():
     assert support(img, model, moved) < 0.6
     # A model put nowhere finite is not found at all.
     assert support(img, model, np.diag([1.0, 1.0, 0.0])) == 0.0
+
+
+def _circle(r: float, n: int = 64) -> np.ndarray:
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    return np.column_stack([r * np.cos(t), r * np.sin(t)])
+
+
+def test_a_rim_beside_a_thin_ring_is_fitted_only_where_the_ring_is_or_far_from_it():
+    # A disc's rim 5 cm out from a ring 1.5 cm wide: alone, the rim's edge is pushed
+    # out by the ring's blur; it is fitted where the ring is, or 4 times as far as
+    # it would need alone.
+    polys = [(_circle(0.55), False), (_circle(0.50), True), (_circle(0.485), False)]
+    plain = EdgeModel.from_polygons(polys)
+    rim = EdgeModel.from_polygons(polys, rims=[0])
+    on_rim = rim.polygon == 0
+    assert np.allclose(plain.clearance_m[on_rim], 0.05, rtol=0.05)
+    assert np.allclose(rim.clearance_m[on_rim], 0.015, rtol=0.05)  # the ring's own
+    assert np.array_equal(rim.clearance_m[~on_rim], plain.clearance_m[~on_rim])
+    # a ring that touches a square board's rim at its sides' middles only: no matter
+    square = np.array([[-0.55, 0.55], [0.55, 0.55], [0.55, -0.55], [-0.55, -0.55]])
+    polys = [(square, False), (_circle(0.54), True), (_circle(0.525), False)]
+    plain = EdgeModel.from_polygons(polys)
+    rim = EdgeModel.from_polygons(polys, rims=[0])
+    assert np.array_equal(rim.clearance_m, plain.clearance_m)
