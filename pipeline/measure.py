@@ -56,6 +56,7 @@ LEVELLING_STEPS = 3  # ... the pixels' weight lowered 4-fold at most this many t
 POINT_SIGMA_PX = 0.3
 NOISE_SHOWN_PX_PER_RAD, TILT_SHOWN_PX_PER_RAD, POLISH_SHOWN_PX_PER_RAD = 4.5, 18.0, 18.0
 AMBIGUOUS_FIT = 0.8  # two poses whose RMS errors are within this ratio are a tie
+MAX_BENT = 0.01  # of the pad's span: the RMS of a pose that the homography fits
 WIDE_SEARCH_PX = 6.0  # how far the whole pad's edges are first looked for
 SELF_SUFFICIENT_PX = 100.0  # an H this large pins the pose by itself
 MIN_MARKS_FOUND = 0.5  # of the marks' resolvable sides, for the whole pad to count
@@ -364,6 +365,10 @@ def _fit_pose(
         # noise alone by 4 degrees and more (an H with no mark found, 20-50 px): on the
         # bench's views such poses were up to 34 degrees off with no tie to tell.
         ambiguous |= _tilt_shown(px, cam, enlarged) < NOISE_SHOWN_PX_PER_RAD
+        # A homography no pose fits within a hundredth of the pad's span is bent (fitted
+        # to edges that are not all the pad's): on the bench's views such poses were
+        # 8-52 degrees off; the right ones fitted within 0.8 % (1.4 % once in 315).
+        ambiguous |= rms > MAX_BENT * _span(px)
         fit = EdgeFit(rvec, tvec, rms, len(pts_m), 0)
     support = edge_support(levels, reference.edge_model, cam, fit.rvec, fit.tvec)
     if polish and (gravity is None or shown >= POLISH_SHOWN_PX_PER_RAD):

@@ -32,7 +32,8 @@ class Pose:
     decides between them. ``ambiguous``: the pixels fit another
     pose, tilted the other way, as well as this one, or show the tilt too little
     to tell it within a few degrees (a small pad seen nearly head on, an H with
-    no other mark found, with no ``gravity_hint`` to tell them apart).
+    no other mark found, with no ``gravity_hint`` to tell them apart), or no pose
+    fits them within a hundredth of the pad's span (edges of something else taken).
     """
 
     position_m: np.ndarray

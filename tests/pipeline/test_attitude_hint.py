@@ -155,3 +155,17 @@ def test_a_tilt_the_h_alone_hardly_shows_is_flagged_without_the_hint() -> None:
     hinted = process_frame(pad, reference, CAM, gravity_hint=hint)
     assert hinted.pose is not None and not hinted.pose.ambiguous
     assert rotation_error_deg(hinted.pose, view.R_pad_cam) < 3.0
+
+
+@pytest.mark.parametrize(
+    "design, i, level", [("paper_ring", 16, "today"), ("paper_ring", 24, "today"),
+                         ("grass_paint", 1, "real"), ("red_on_black", 25, "real")],
+)  # fmt: skip
+def test_a_bent_homography_is_flagged_without_the_hint(design, i, level) -> None:
+    # Bench views where the pad's edges, fitted in part to others, bent its homography
+    # out of any pose (its points 1.1-2 % of the pad's span off the best): without the
+    # hint their poses were 8-52 degrees off, unflagged.
+    pad, _, _, view, reference = bench_frames(design, 0, i, level)
+    blind = process_frame(pad, reference, CAM)
+    assert blind.detected and blind.pose is not None
+    assert blind.pose.ambiguous, rotation_error_deg(blind.pose, view.R_pad_cam)
