@@ -48,3 +48,12 @@ def bench_frames(design_name: str, seed: int, i: int, level: str, **changes):
 def _reference(design_name: str) -> Reference:
     design = get_design(design_name)
     return Reference.from_image(design.draw().image, design.size_m)
+
+
+def true_homography(
+    position: np.ndarray, R_pad_cam: np.ndarray, camera: Camera = CAM
+) -> np.ndarray:
+    """Pad metres -> pixels for the camera at ``position`` (pad frame)."""
+    R = R_pad_cam.T
+    t = -R @ position
+    return camera.K @ np.column_stack([R[:, 0], R[:, 1], t])

@@ -15,14 +15,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline import Camera, Reference, process_frame
+from pipeline import Reference, process_frame
 from pipeline.bench.frames import make_view
 from pipeline.find import BOARD_TOLERANCE
 from pipeline.preprocess import smooth_channel
 from pipeline.render import camera_rotation, get_design, make_pad_image, make_scene, render
 from pipeline.render.degrade import Shadow
 from pipeline.template import compare
-from tests.pipeline.bench_support import CAM, bench_frames
+from tests.pipeline.bench_support import CAM, bench_frames, true_homography
 
 SIZE_M = 0.55
 
@@ -30,13 +30,6 @@ SIZE_M = 0.55
 @pytest.fixture(scope="module")
 def reference() -> Reference:
     return Reference.from_image(make_pad_image(800), SIZE_M)
-
-
-def _true_h(position: np.ndarray, R_pad_cam: np.ndarray, camera: Camera = CAM) -> np.ndarray:
-    """Pad metres -> pixels for the camera at ``position`` (pad frame)."""
-    R = R_pad_cam.T
-    t = -R @ position
-    return camera.K @ np.column_stack([R[:, 0], R[:, 1], t])
 
 
 def _board_levels(texture: np.ndarray, reference: Reference, shadow: Shadow | None):
@@ -50,7 +43,7 @@ def _board_levels(texture: np.ndarray, reference: Reference, shadow: Shadow | No
         reference.template_pyramid,
         reference.channel_px_per_m,
         reference.corners_m,
-        _true_h(position, R),
+        true_homography(position, R),
     )
     return seen.board, seen.reference_board
 

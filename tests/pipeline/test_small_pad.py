@@ -25,7 +25,7 @@ from pipeline.preprocess import smooth_channel
 from pipeline.render import camera_rotation, get_design, make_pad_image, make_scene, render
 from pipeline.render.view import render_view
 from pipeline.template import pad_pattern
-from tests.pipeline.bench_support import score_bench_frames
+from tests.pipeline.bench_support import score_bench_frames, true_homography
 
 CAM = Camera.from_fov(640, 480, 60.0)
 
@@ -33,13 +33,6 @@ CAM = Camera.from_fov(640, 480, 60.0)
 @pytest.fixture(scope="module")
 def reference():
     return Reference.from_image(make_pad_image(800), 0.55)
-
-
-def _true_h(position: np.ndarray, R_pad_cam: np.ndarray) -> np.ndarray:
-    """Pad metres -> pixels for the camera at ``position`` (pad frame)."""
-    R = R_pad_cam.T
-    t = -R @ position
-    return CAM.K @ np.column_stack([R[:, 0], R[:, 1], t])
 
 
 def _view(texture: np.ndarray, altitude: float, k: int, camera: Camera = CAM):
@@ -110,7 +103,7 @@ def test_the_whole_pad_pattern_tells_the_pad_from_its_h_alone(reference):
                     reference.template_pyramid,
                     reference.channel_px_per_m,
                     pad_box_m(reference),
-                    _true_h(position, R),
+                    true_homography(position, R),
                 )
             )
         passed += scores[0] >= MIN_PAD_NCC
