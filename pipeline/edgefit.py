@@ -214,10 +214,11 @@ def _clearance_m(
         along = np.abs(rel @ u[i])
         beside = along < 0.5 * (length[i] + length[parallel])  # they overlap lengthwise
         if beside.any():
+            others = np.flatnonzero(parallel)
             k = int(np.argmin(np.where(beside, across, np.inf)))
-            out[i], nearest[i] = float(across[k]), int(np.flatnonzero(parallel)[k])
+            out[i], nearest[i] = float(across[k]), int(others[k])
             # (a curve alongside runs in pieces: those about as near count together)
-            near = np.flatnonzero(parallel)[beside & (across <= 1.5 * out[i])]
+            near = others[beside & (across <= 1.5 * out[i])]
             ta, tb = (a[near] - a[i]) @ u[i], (b[near] - a[i]) @ u[i]
             overlap = np.minimum(np.maximum(ta, tb), length[i]) - np.maximum(np.minimum(ta, tb), 0)
             shared[i] = min(1.0, float(np.maximum(overlap, 0.0).sum()) / length[i])

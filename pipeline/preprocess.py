@@ -232,7 +232,7 @@ def binarize_channel(
         light = _log_light(smooth, dark)
         square = cv2.getStructuringElement(cv2.MORPH_RECT, (TOPHAT_SIDE_PX, TOPHAT_SIDE_PX))
         ground = cv2.morphologyEx(light, cv2.MORPH_OPEN, square)
-        mask = np.where(cv2.subtract(light, ground) > TOPHAT_RISE, 255, 0).astype(np.uint8)
+        _, mask = cv2.threshold(cv2.subtract(light, ground), TOPHAT_RISE, 255, cv2.THRESH_BINARY)
         t = float("nan")
     else:
         enhanced = seed_enhance(gray)
