@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from pipeline.jit import compiled
+from pipeline.jit import compiled, solve
 
 MIN_DROP = 4.0  # an edge: levels dropping at least this much over half a frame pixel
 STEP_PX = 0.5  # between the samples across an edge
@@ -158,36 +158,6 @@ def _dot(a, b):
     for k in range(a.shape[0]):
         acc += a[k] * b[k]
     return acc
-
-
-@compiled
-def _solve(A, b):
-    """x with A x = b (Gaussian elimination, partial pivoting); ok False when singular."""
-    n = A.shape[0]
-    M = A.copy()
-    x = b.copy()
-    for c in range(n):
-        p = c
-        for r in range(c + 1, n):
-            if abs(M[r, c]) > abs(M[p, c]):
-                p = r
-        if abs(M[p, c]) < 1e-300:
-            return x, False
-        if p != c:
-            for k in range(n):
-                M[c, k], M[p, k] = M[p, k], M[c, k]
-            x[c], x[p] = x[p], x[c]
-        for r in range(c + 1, n):
-            f = M[r, c] / M[c, c]
-            for k in range(c, n):
-                M[r, k] -= f * M[c, k]
-            x[r] -= f * x[c]
-    for c in range(n - 1, -1, -1):
-        acc = x[c]
-        for k in range(c + 1, n):
-            acc -= M[c, k] * x[k]
-        x[c] = acc / M[c, c]
-    return x, True
 
 
 @compiled
@@ -352,7 +322,7 @@ def homography_steps(
         for k in range(kd):
             A[8 + k, 8 + k] += per / deform_sigma[k] ** 2 + 1e-12
             g[8 + k] -= per * p[k] / deform_sigma[k] ** 2
-        step, solved = _solve(A, g)
+        step, solved = solve(A, g)
         if not solved:
             return best_h, best_p, -1.0, found, False
         h = h + step[:8]
@@ -469,7 +439,7 @@ def pose_step(
         A[a, a] += 1e-9
         for b in range(a):
             A[a, b] = A[b, a]
-    step, solved = _solve(A, g)
+    step, solved = solve(A, g)
     if not solved:
         return np.zeros(6), -1.0, 0, 0, False
     acc = 0.0

@@ -17,9 +17,11 @@ it (``found_by``: "follow", "track", "search" or "board").
 
 from __future__ import annotations
 
+import functools
 import math
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -38,6 +40,7 @@ from pipeline.preprocess import (
     Binarized,
     binarize_channel,
     check_image,
+    smooth,
     smooth_channel,
     to_channel,
 )
@@ -57,6 +60,8 @@ FOLLOW_COARSE_SPAN_PX = 120.0  # a larger pad is first followed on a view where 
 FOLLOW_SUPPORT = 0.9  # the share of the H's sides found again for a followed H to count
 MAX_FOLLOW_GROWTH = 1.25  # and its size may change by this factor between two frames
 MAX_CLOSER_LOOKS = 3  # small marks refused on a wide frame, looked at again enlarged
+
+MaskSource = Callable[[], np.ndarray]  # a threshold mask, made when first asked for
 
 __all__ = ["CandidateVerifier", "process_frame"]
 
@@ -131,19 +136,19 @@ def process_frame(
     stages = Stages()
     tally = Tally()
     search_view = View.whole(image.shape, SEARCH_WIDTH_PX)
-    mask = None
+    mask: MaskSource | None = None
     # First the H where it was a moment ago, followed.
     followed = _follow(prior, image, reference, method)
     if followed is not None:
-        view, binary, H = followed
-        mask = _mask_for(binary.mask, view, search_view)
+        view, levels, threshold, H = followed
+        mask = functools.partial(_threshold_for, threshold, view, search_view)
         stages.lap("follow")
-        measured = measure(image, reference, cam, H, gravity=gravity, found=(view, binary.levels))
+        measured = measure(image, reference, cam, H, gravity=gravity, found=(view, levels))
         stages.lap("pose")
         if measured is not None:
             outline = apply_h(measured.H, reference.corners_m)
             return _detected(
-                measured, reference, outline, yaw_hint, "follow", mask, stages, t_start
+                measured, reference, outline, yaw_hint, "follow", mask, stages, t_start, prior
             )
     # Then searched for: around the last detection, then the whole frame, then the
     # whole frame again with the thresholds that hold across shadows.
@@ -175,7 +180,7 @@ def process_frame(
             tracking=way == "track",
             enlarged=max(1.0, view.scale),
         )
-        mask = _mask_for(binary.mask, view, search_view)
+        mask = functools.partial(_mask_for, binary.mask, view, search_view)
         if view is far:
             far_found = (binary, shapes)
         for hit in hits:
@@ -191,7 +196,9 @@ def process_frame(
             if measured is None:  # no pose of the pad lying level fits it (from this start)
                 continue
             contour = apply_h(to_frame, hit.candidate.region.contour.astype(np.float64))
-            return _detected(measured, reference, contour, yaw_hint, way, mask, stages, t_start)
+            return _detected(
+                measured, reference, contour, yaw_hint, way, mask, stages, t_start, prior
+            )
     # Last, a pad too far for its H to be placed, by its board on the finest view.
     if far_found is not None:
         far_binary, shapes = far_found
@@ -204,7 +211,7 @@ def process_frame(
             if measured is not None and measured.support >= MIN_BOARD_SUPPORT:
                 outline = apply_h(measured.H, reference.corners_m)
                 return _detected(
-                    measured, reference, outline, yaw_hint, "board", mask, stages, t_start
+                    measured, reference, outline, yaw_hint, "board", mask, stages, t_start, prior
                 )
         stages.lap("board")
     return _nothing(stages.timings, t_start, tally.reason(), mask)
@@ -239,11 +246,13 @@ def _detected(
     contour: np.ndarray,
     yaw_hint: float | None,
     way: str,
-    mask: np.ndarray | None,
+    mask: MaskSource | None,
     stages: Stages,
     t_start: float,
+    prior: FrameResult | None,
 ) -> FrameResult:
-    """The result for a measured pad whose H's outline on the frame is ``contour``."""
+    """The result for a measured pad whose H's outline on the frame is ``contour``
+    (and how it moved since ``prior``, when that found it too)."""
     fit = measured.fit
     # A pad whose heading this frame did not tell is reported as a symmetric one's.
     symmetric = reference.symmetric or not measured.heading_told
@@ -269,26 +278,31 @@ def _detected(
         score=measured.support,
         found_by=way,
         homography=measured.H,
-        mask=mask,
+        mask_source=mask,
+        motion=_motion(prior, measured.H),
     )
 
 
 def _follow(
     prior: FrameResult | None, image: np.ndarray, reference: Reference, method: str
-) -> tuple[View, Binarized, np.ndarray] | None:
+) -> Followed | None:
     """The H followed from the last frame: its sides fitted to the edges near where
     they were, in a window at the measurement's scale. A pad moves a few pixels
     between frames; when nearly all of the H's sides are found again (and its size
     holds), it is the same H, and the search's steps are not needed. A large pad,
-    which moves more pixels, is first followed on a coarser view. Returns the
-    window, its binarized channel (the threshold view's mask) and the H's homography
-    in frame pixels, or None (the search takes over)."""
+    which moves more pixels, is first followed on a coarser view. Returns None when
+    the search must take over."""
     if prior is None or not prior.detected or prior.homography is None:
         return None
     H = prior.homography
     span = _pad_span_px(H, reference)
     if not math.isfinite(span) or span < 1.0:
         return None
+    # Where the pad would be had it moved on as it did between the last two frames.
+    if prior.motion is not None:
+        found = _follow_fine(image, reference, method, prior.motion @ H, span)
+        if found is not None:
+            return found
     if span > 1.5 * FOLLOW_COARSE_SPAN_PX:
         coarse = _window(image, H, reference, FOLLOW_COARSE_SPAN_PX / span)
         if coarse is None:
@@ -297,14 +311,52 @@ def _follow(
         H = _fit_near(levels, coarse, reference, H)
         if H is None:
             return None
+    return _follow_fine(image, reference, method, H, span)
+
+
+class Followed(NamedTuple):
+    """A followed H: the window it was fitted in, the window's smoothed channel,
+    its threshold mask (made when asked for: the fit does not need it) and the H's
+    homography (pad metres -> frame pixels)."""
+
+    view: View
+    levels: np.ndarray
+    threshold: MaskSource
+    H: np.ndarray
+
+
+def _follow_fine(
+    image: np.ndarray, reference: Reference, method: str, H: np.ndarray, span: float
+) -> Followed | None:
+    """The H's sides fitted near where ``H`` puts them, at the measurement's scale."""
     view = _window(image, H, reference, MEASURE_SPAN_PX / span)
     if view is None:
         return None
     projection = reference.projection
+    channel = to_channel(view.image(image), projection)
+    levels = smooth(channel).astype(np.float32)
+    H = _fit_near(levels, view, reference, H)
+    if H is None:
+        return None
     dark = projection.is_gray and projection.polarity == "dark"
-    binary = binarize_channel(to_channel(view.image(image), projection), method, dark=dark)
-    H = _fit_near(binary.levels, view, reference, H)
-    return None if H is None else (view, binary, H)
+    threshold = functools.partial(_threshold, channel, method, dark)
+    return Followed(view, levels, threshold, H)
+
+
+def _threshold(channel: np.ndarray, method: str, dark: bool) -> np.ndarray:
+    return binarize_channel(channel, method, dark=dark).mask
+
+
+def _motion(prior: FrameResult | None, H: np.ndarray) -> np.ndarray | None:
+    """How the pad moved on the frame since ``prior`` found it (frame pixels ->
+    frame pixels), or None."""
+    if prior is None or not prior.detected or prior.homography is None:
+        return None
+    try:
+        motion = H @ np.linalg.inv(prior.homography)
+    except np.linalg.LinAlgError:
+        return None
+    return motion / motion[2, 2] if np.all(np.isfinite(motion)) and motion[2, 2] != 0 else None
 
 
 def _window(image: np.ndarray, H: np.ndarray, reference: Reference, scale: float) -> View | None:
@@ -362,6 +414,11 @@ def _tracking_view(
     )
 
 
+def _threshold_for(threshold: MaskSource, view: View, search: View) -> np.ndarray:
+    """``_mask_for`` of a mask made when asked for."""
+    return _mask_for(threshold(), view, search)
+
+
 def _mask_for(mask: np.ndarray, view: View, search: View) -> np.ndarray:
     """The threshold mask a view was searched with, in the search view's pixels
     (a tracking window's mask is laid where the window is, the rest blank)."""
@@ -400,7 +457,7 @@ def _camera_for(camera: Camera, width: int, height: int) -> Camera:
 
 
 def _nothing(
-    timings: dict[str, float], t_start: float, reason: str, mask: np.ndarray | None = None
+    timings: dict[str, float], t_start: float, reason: str, mask: MaskSource | None = None
 ) -> FrameResult:
     timings["total"] = (time.perf_counter() - t_start) * 1e3
     nan = float("nan")
@@ -413,5 +470,5 @@ def _nothing(
         pose=None,
         timings_ms=timings,
         reason=reason,
-        mask=mask,
+        mask_source=mask,
     )

@@ -12,3 +12,34 @@ from __future__ import annotations
 import numba
 
 compiled = numba.njit(cache=True, nogil=True)
+
+
+@compiled
+def solve(A, b):
+    """x with A x = b for the compiled loops' small systems (Gaussian elimination,
+    partial pivoting), and whether A was not singular."""
+    n = A.shape[0]
+    M = A.copy()
+    x = b.copy()
+    for c in range(n):
+        p = c
+        for r in range(c + 1, n):
+            if abs(M[r, c]) > abs(M[p, c]):
+                p = r
+        if abs(M[p, c]) < 1e-300:
+            return x, False
+        if p != c:
+            for k in range(n):
+                M[c, k], M[p, k] = M[p, k], M[c, k]
+            x[c], x[p] = x[p], x[c]
+        for r in range(c + 1, n):
+            f = M[r, c] / M[c, c]
+            for k in range(c, n):
+                M[r, k] -= f * M[c, k]
+            x[r] -= f * x[c]
+    for c in range(n - 1, -1, -1):
+        acc = x[c]
+        for k in range(c + 1, n):
+            acc -= M[c, k] * x[k]
+        x[c] = acc / M[c, c]
+    return x, True

@@ -30,6 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pipeline.jit import compiled
+
 __all__ = ["ShapeMoments", "hu_distance", "shape_moments"]
 
 
@@ -162,33 +164,43 @@ def _contour_central(pts: np.ndarray) -> tuple[dict[str, float], tuple[float, fl
     if not np.all(np.isfinite(pts)):
         raise ValueError("shape: contour points must be finite (found NaN or inf)")
     origin = pts.mean(axis=0)
-    x0, y0 = (pts - origin).T
-    x1, y1 = np.roll(x0, -1), np.roll(y0, -1)
-    # Green's theorem over the polygon's edges (x0, y0) -> (x1, y1).
-    cross = x0 * y1 - x1 * y0
-    m00 = cross.sum() / 2
+    sums = _polygon_sums(np.ascontiguousarray(pts - origin))
+    m00 = sums[0]
     span = float(np.ptp(pts, axis=0).max())
     if abs(m00) <= 1e-12 * max(span * span, 1.0):
         raise ValueError("shape: the contour encloses zero area")
-    xx = x0 * x0 + x0 * x1 + x1 * x1
-    yy = y0 * y0 + y0 * y1 + y1 * y1
-    m21 = x0 * x0 * (3 * y0 + y1) + 2 * x0 * x1 * (y0 + y1) + x1 * x1 * (y0 + 3 * y1)
-    m12 = y0 * y0 * (3 * x0 + x1) + 2 * y0 * y1 * (x0 + x1) + y1 * y1 * (x0 + 3 * x1)
-    m = {
-        "m00": m00,
-        "m10": np.sum(cross * (x0 + x1)) / 6,
-        "m01": np.sum(cross * (y0 + y1)) / 6,
-        "m20": np.sum(cross * xx) / 12,
-        "m11": np.sum(cross * (x0 * (2 * y0 + y1) + x1 * (y0 + 2 * y1))) / 24,
-        "m02": np.sum(cross * yy) / 12,
-        "m30": np.sum(cross * (x0 + x1) * (x0 * x0 + x1 * x1)) / 20,
-        "m21": np.sum(cross * m21) / 60,
-        "m12": np.sum(cross * m12) / 60,
-        "m03": np.sum(cross * (y0 + y1) * (y0 * y0 + y1 * y1)) / 20,
-    }
+    m = dict(zip(_RAW, (float(v) for v in sums), strict=True))
     if m00 < 0:  # clockwise in these axes: every moment comes out negated
         m = {k: -v for k, v in m.items()}
     return _central_from_raw(m, origin)
+
+
+_RAW = ("m00", "m10", "m01", "m20", "m11", "m02", "m30", "m21", "m12", "m03")
+
+
+@compiled
+def _polygon_sums(pts):
+    """The raw moments ``_RAW`` of the polygon through ``pts`` (N x 2), by Green's
+    theorem over its edges (x0, y0) -> (x1, y1)."""
+    out = np.zeros(10)
+    n = pts.shape[0]
+    for i in range(n):
+        x0, y0 = pts[i, 0], pts[i, 1]
+        x1, y1 = pts[(i + 1) % n, 0], pts[(i + 1) % n, 1]
+        cross = x0 * y1 - x1 * y0
+        out[0] += cross / 2
+        out[1] += cross * (x0 + x1) / 6
+        out[2] += cross * (y0 + y1) / 6
+        out[3] += cross * (x0 * x0 + x0 * x1 + x1 * x1) / 12
+        out[4] += cross * (x0 * (2 * y0 + y1) + x1 * (y0 + 2 * y1)) / 24
+        out[5] += cross * (y0 * y0 + y0 * y1 + y1 * y1) / 12
+        out[6] += cross * (x0 + x1) * (x0 * x0 + x1 * x1) / 20
+        m21 = x0 * x0 * (3 * y0 + y1) + 2 * x0 * x1 * (y0 + y1) + x1 * x1 * (y0 + 3 * y1)
+        m12 = y0 * y0 * (3 * x0 + x1) + 2 * y0 * y1 * (x0 + x1) + y1 * y1 * (x0 + 3 * x1)
+        out[7] += cross * m21 / 60
+        out[8] += cross * m12 / 60
+        out[9] += cross * (y0 + y1) * (y0 * y0 + y1 * y1) / 20
+    return out
 
 
 def _central_from_raw(

@@ -6,6 +6,7 @@ import cv2
 import numpy as np
 
 from pipeline.camera import Camera
+from pipeline.jit import compiled, solve
 from pipeline.result import Pose, yaw_of
 
 # A 180 degree turn about the pad's z axis.
@@ -148,24 +149,48 @@ def refine_with_gravity(
     t = np.asarray(tvec, np.float64).reshape(3).copy()
     w_px = 1.0 / sigma_px
     w_g = 1.0 / np.radians(sigma_deg)
-    J_g = np.zeros((3, 6))
     for _ in range(iterations):
         proj, jac = cv2.projectPoints(obj, r, t, camera.K, camera.dist)
-        res_px = (proj.reshape(-1, 2) - img).ravel() * w_px
-        J_px = jac[:, :6] * w_px
-        # The pad's up (the rotation's third column) against gravity's opposite.
         R, dR = cv2.Rodrigues(r)  # dR: d(R's 9 entries, row by row) / d(rvec), 3 x 9
-        res_g = (R[:, 2] + g) * w_g
-        J_g[:, :3] = dR[:, 2::3].T * w_g
-        res = np.concatenate([res_px, res_g])
-        J = np.vstack([J_px, J_g])
-        A = J.T @ J + 1e-9 * np.eye(6)
-        try:
-            step = np.linalg.solve(A, -J.T @ res)
-        except np.linalg.LinAlgError:
+        step, solved = _gravity_step(proj.reshape(-1, 2), jac, img, R, dR, g, w_px, w_g)
+        if not solved:
             break
         r += step[:3]
         t += step[3:]
-        if np.abs(step).max() < 1e-8:
+        if np.abs(step).max() < 1e-6:  # a micro-radian, a micrometre
             break
     return r.reshape(3, 1), t.reshape(3, 1)
+
+
+@compiled
+def _gravity_step(proj, jac, img, R, dR, g, w_px, w_g):
+    """`refine_with_gravity`'s Gauss-Newton step over (rvec, tvec): the reprojection
+    errors (``proj`` - ``img``, their Jacobian ``jac`` from cv2.projectPoints) weighed
+    by ``w_px``, and the pad's up (R's third column) against gravity's opposite by
+    ``w_g`` (its Jacobian the third column's rows of ``dR``, cv2.Rodrigues')."""
+    A = np.zeros((6, 6))
+    b = np.zeros(6)
+    n = img.shape[0]
+    w2 = w_px * w_px
+    for i in range(n):
+        for c in range(2):
+            row = 2 * i + c
+            e = proj[i, c] - img[i, c]
+            for k in range(6):
+                jk = jac[row, k]
+                b[k] -= w2 * jk * e
+                for m in range(k, 6):
+                    A[k, m] += w2 * jk * jac[row, m]
+    wg2 = w_g * w_g
+    for c in range(3):
+        e = R[c, 2] + g[c]
+        for k in range(3):
+            jk = dR[k, 3 * c + 2]
+            b[k] -= wg2 * jk * e
+            for m in range(k, 3):
+                A[k, m] += wg2 * jk * dR[m, 3 * c + 2]
+    for k in range(6):
+        A[k, k] += 1e-9
+        for m in range(k):
+            A[k, m] = A[m, k]
+    return solve(A, b)

@@ -174,7 +174,7 @@ def to_channel(image_bgr: np.ndarray, projection: Projection = GRAY) -> np.ndarr
 def smooth_channel(image_bgr: np.ndarray, projection: Projection = GRAY) -> np.ndarray:
     """The frame on ``projection``'s channel, smoothed for the sensor noise (as
     `binarize` smooths it before thresholding)."""
-    return _smooth(to_channel(image_bgr, projection))
+    return smooth(to_channel(image_bgr, projection))
 
 
 def _log_light(channel: np.ndarray, dark: bool) -> np.ndarray:
@@ -194,7 +194,8 @@ def _log_table(dark: bool) -> np.ndarray:
 _LOG_LIGHT, _LOG_DARK = _log_table(False), _log_table(True)
 
 
-def _smooth(channel: np.ndarray) -> np.ndarray:
+def smooth(channel: np.ndarray) -> np.ndarray:
+    """A channel smoothed for the sensor noise (as `binarize_channel` smooths it)."""
     return cv2.GaussianBlur(channel, (5, 5), 1.0)
 
 
@@ -215,21 +216,21 @@ def binarize_channel(
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-    smooth = _smooth(gray)
+    smoothed = smooth(gray)
     if method == "otsu":
-        t, mask = cv2.threshold(smooth, 0, 255, cv2.THRESH_BINARY | cv2.THRESH_OTSU)
+        t, mask = cv2.threshold(smoothed, 0, 255, cv2.THRESH_BINARY | cv2.THRESH_OTSU)
     elif method == "adaptive":
         mask = cv2.adaptiveThreshold(
-            smooth, 255, cv2.ADAPTIVE_THRESH_MEAN_C, cv2.THRESH_BINARY, 41, -12
+            smoothed, 255, cv2.ADAPTIVE_THRESH_MEAN_C, cv2.THRESH_BINARY, 41, -12
         )
         t = float("nan")
     elif method == "shadow":
         mask = cv2.adaptiveThreshold(
-            _log_light(smooth, dark), 255, cv2.ADAPTIVE_THRESH_MEAN_C, cv2.THRESH_BINARY, 41, -8
+            _log_light(smoothed, dark), 255, cv2.ADAPTIVE_THRESH_MEAN_C, cv2.THRESH_BINARY, 41, -8
         )
         t = float("nan")
     elif method == "tophat":
-        light = _log_light(smooth, dark)
+        light = _log_light(smoothed, dark)
         square = cv2.getStructuringElement(cv2.MORPH_RECT, (TOPHAT_SIDE_PX, TOPHAT_SIDE_PX))
         ground = cv2.morphologyEx(light, cv2.MORPH_OPEN, square)
         _, mask = cv2.threshold(cv2.subtract(light, ground), TOPHAT_RISE, 255, cv2.THRESH_BINARY)
@@ -238,4 +239,4 @@ def binarize_channel(
         enhanced = seed_enhance(gray)
         t = 0.85 * 255.0
         mask = np.where(enhanced > t, 255, 0).astype(np.uint8)
-    return Binarized(gray=gray, smooth=smooth, mask=mask, threshold=float(t))
+    return Binarized(gray=gray, smooth=smoothed, mask=mask, threshold=float(t))

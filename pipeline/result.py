@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -77,7 +79,10 @@ class FrameResult:
     ``homography``: pad metres -> frame pixels, for tracking the pad in the next
     frame. ``mask``: the threshold mask the pipeline searched with (uint8, 0/255,
     at its search size: frames wider than 640 px are searched subsampled), for
-    showing. Neither of the last two is part of :meth:`to_dict`.
+    showing; made by ``mask_source`` when first asked for (a followed pad is
+    fitted without thresholding its window). ``motion``: how the pad moved on the
+    frame since the ``prior`` it was found in (frame pixels -> frame pixels), for
+    predicting where it is next. None of the last four is part of :meth:`to_dict`.
     """
 
     detected: bool
@@ -92,7 +97,12 @@ class FrameResult:
     reason: str = ""
     found_by: str = ""
     homography: np.ndarray | None = field(default=None, repr=False)
-    mask: np.ndarray | None = field(default=None, repr=False)
+    mask_source: Callable[[], np.ndarray] | None = field(default=None, repr=False)
+    motion: np.ndarray | None = field(default=None, repr=False)
+
+    @cached_property
+    def mask(self) -> np.ndarray | None:
+        return None if self.mask_source is None else self.mask_source()
 
     def to_dict(self) -> dict:
         return {
