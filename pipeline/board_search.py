@@ -30,7 +30,7 @@ from pipeline.measure import pad_box_m
 from pipeline.preprocess import border_pixels
 from pipeline.reference import RELIABLE_H_PX, Reference
 from pipeline.shapes import Region
-from pipeline.template import pad_pattern
+from pipeline.template import MARGIN, pad_pattern
 
 MIN_BOARD_PX = 12.0  # a board narrower than this (frame pixels) holds too few for its pattern
 MIN_SEED_PX = 3.0  # the H's mark, at least this wide on the view
@@ -48,6 +48,14 @@ MAX_BOARDS = 6  # quadrilaterals fitted per frame at most, the most contrasted f
 MIN_BOARD_NCC = 0.55
 MIN_H_FOUND = 0.4
 MIN_OUTLINE_FOUND = 0.1
+# Or, an H whose strokes are too thin and blurred for their edges to be found (a
+# pixel and a half under a blur of one: paper_ring's at 2.5-3 m), when its own
+# pattern matches (NCC over its box and a margin): such H's matched at 0.75-0.89 on
+# the bench's views, where their pads' whole patterns read 0.2-0.6; of the quadrilaterals
+# fitted on the bench's empty frames (today's, the real-world mix and 6-25 m away,
+# 550 fits) with some of their board's outline found, none matched above 0.39 (the H's
+# painted on floors, up to 0.86, have no board's outline).
+MIN_H_NCC = 0.7
 # Its pose counts when the pad's edges are found where it puts them: the bench's far
 # boards posed within 3 % of the altitude found 0.22-0.5 of them, those 10-40 % off, 0.07-0.13.
 MIN_BOARD_SUPPORT = 0.2
@@ -122,10 +130,11 @@ def _grow_boards(
     # A window with room for the whole pad around its H, and some floor.
     half = int(0.75 * ratio * size) + 4
     cx, cy = (int(v) for v in 0.5 * (lo + hi))
-    x0, y0 = cx - half, cy - half
-    if x0 < 0 or y0 < 0 or cx + half >= levels.shape[1] or cy + half >= levels.shape[0]:
-        return []
+    # (cut by the view's edge: a board that reaches it is refused as running into it)
+    x0, y0 = max(cx - half, 0), max(cy - half, 0)
     win = levels[y0 : cy + half + 1, x0 : cx + half + 1]
+    if min(win.shape) < 2 * MIN_SEED_PX + 4:
+        return []
     seed = np.zeros(win.shape, np.uint8)
     cv2.fillPoly(seed, [(contour - [x0, y0]).astype(np.int32).reshape(-1, 1, 2)], 1)
     border = border_pixels(win, 2)
@@ -218,8 +227,7 @@ def _fit_board(
             levels, reference.edge_model, start.astype(np.float64), iterations=3, search_px=3.0,
             sides_alike=False,
         )  # fmt: skip
-        # (an H too small for any of its sides to be told is no evidence)
-        if fit is None or _found_share(fit.side_found[h_sides]) < MIN_H_FOUND:
+        if fit is None:
             continue
         if outline is not None and _found_share(fit.side_found[outline]) < MIN_OUTLINE_FOUND:
             continue
@@ -227,9 +235,25 @@ def _fit_board(
         # the pose by up to 40 % of the altitude. Its affine part is kept.
         H = affine_part(fit.H, np.zeros(2))
         ncc = pad_pattern(levels, reference.template_pyramid, reference.channel_px_per_m, box, H)
-        if math.isfinite(ncc) and ncc >= MIN_BOARD_NCC and (best is None or ncc > best[0]):
+        if not math.isfinite(ncc):
+            continue
+        # (an H too small for any of its sides to be told is no evidence)
+        sides = _found_share(fit.side_found[h_sides]) >= MIN_H_FOUND and ncc >= MIN_BOARD_NCC
+        if (sides or _h_pattern(levels, reference, H) >= MIN_H_NCC) and (
+            best is None or ncc > best[0]
+        ):
             best = (ncc, H)
     return best
+
+
+def _h_pattern(levels: np.ndarray, reference: Reference, H: np.ndarray) -> float:
+    """The correlation of the view with the reference over the H's box and a margin
+    (``template.MARGIN`` of its size), nan when too little of it is in view."""
+    lo, hi = reference.corners_m.min(axis=0), reference.corners_m.max(axis=0)
+    room = MARGIN * float((hi - lo).max())
+    (x0, y0), (x1, y1) = lo - room, hi + room
+    around = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+    return pad_pattern(levels, reference.template_pyramid, reference.channel_px_per_m, around, H)
 
 
 def _outline_sides(reference: Reference) -> np.ndarray | None:

@@ -138,3 +138,21 @@ def test_only_a_pad_whose_picture_is_its_board_is_looked_for_by_it():
     for name in ("orange_ring", "grass_paint"):  # a disc on its floor, paint on grass
         design = get_design(name)
         assert not Reference.from_image(design.draw().image, design.size_m).board_is_outline
+
+
+@pytest.mark.parametrize("i", [52, 73, 98])
+def test_a_board_whose_h_is_too_thin_for_its_edges_is_found_by_the_hs_pattern(i):
+    # paper_ring at 2.8-3.2 m (design bench views): a 14 px H with strokes of 1.5 px
+    # under a blur of 1, a third of its sides' edges found; its pattern matched at
+    # NCC 0.75-0.82.
+    d = get_design("paper_ring")
+    reference = Reference.from_image(d.draw().image, d.size_m)
+    scenes = make_scenes(d, [0, i // SCENE_EVERY], "today", ())
+    view, noise_seed = make_view([0, i, 7], CAM, d, "today")
+    frame = render_view(scenes.pad, CAM, view, np.random.default_rng(noise_seed))
+    hint = gravity_hint(view.R_pad_cam, [0, i, 11])
+    res = process_frame(frame, reference, CAM, gravity_hint=hint)
+    assert res.detected and res.found_by == "board", res.reason
+    tally = Tally()
+    tally.score(True, res.pose, view, d.symmetric)
+    assert tally.pos_pct[0] < 3.0 and tally.rot_deg[0] < 3.0, (tally.pos_pct, tally.rot_deg)
