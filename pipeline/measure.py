@@ -56,6 +56,7 @@ LEVELLING_STEPS = 3  # ... the pixels' weight lowered 4-fold at most this many t
 POINT_SIGMA_PX = 0.3
 NOISE_SHOWN_PX_PER_RAD, TILT_SHOWN_PX_PER_RAD, POLISH_SHOWN_PX_PER_RAD = 4.5, 18.0, 18.0
 AMBIGUOUS_FIT = 0.8  # two poses whose RMS errors are within this ratio are a tie
+TOLD_TILT_DEG = 3.0  # without the attitude, a pose not pinned this well is ambiguous
 MAX_BENT = 0.01  # of the pad's span: the RMS of a pose that the homography fits
 WIDE_SEARCH_PX = 6.0  # how far the whole pad's edges are first looked for
 SELF_SUFFICIENT_PX = 100.0  # an H this large pins the pose by itself
@@ -361,10 +362,14 @@ def _fit_pose(
         cands.sort(key=functools.cmp_to_key(lambda a, b: -1 if _better(a, b) else 1))
         rms, _, rvec, tvec = cands[0]
         ambiguous = len(cands) > 1 and _tie(cands[0], cands[1]) and _apart(cands[0], cands[1])
-        # Points that show the tilt by under NOISE_SHOWN px a radian leave it to their
-        # noise alone by 4 degrees and more (an H with no mark found, 20-50 px): on the
-        # bench's views such poses were up to 34 degrees off with no tie to tell.
-        ambiguous |= _tilt_shown(px, cam, enlarged) < NOISE_SHOWN_PX_PER_RAD
+        # The points pin the tilt to about their noise (POINT_SIGMA_PX, or the fit's
+        # RMS where larger) over the tilt they show: a pose whose tilt they do not pin
+        # within TOLD_TILT_DEG at two sigmas is not told from one tilted that far. On
+        # the bench's views without the hint, poses 3-6.5 degrees off showed their tilt
+        # by 5.6-11.5 px a radian (pads of 55-80 px), and H's with no mark found (20-50
+        # px) were up to 34 degrees off with no tie to tell.
+        sigma = max(POINT_SIGMA_PX, rms)
+        ambiguous |= _tilt_shown(px, cam, enlarged) < 2.0 * sigma / np.radians(TOLD_TILT_DEG)
         # A homography no pose fits within a hundredth of the pad's span is bent (fitted
         # to edges that are not all the pad's): on the bench's views such poses were
         # 8-52 degrees off; the right ones fitted within 0.8 % (1.4 % once in 315).

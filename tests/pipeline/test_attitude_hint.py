@@ -169,3 +169,29 @@ def test_a_bent_homography_is_flagged_without_the_hint(design, i, level) -> None
     blind = process_frame(pad, reference, CAM)
     assert blind.detected and blind.pose is not None
     assert blind.pose.ambiguous, rotation_error_deg(blind.pose, view.R_pad_cam)
+
+
+@pytest.mark.parametrize(
+    "design, i, level", [("icao_circle", 25, "real"), ("serif_octagon", 48, "today"),
+                         ("icao_circle", 70, "today"), ("paper_ring", 98, "today")],
+)  # fmt: skip
+def test_a_tilt_its_points_pin_no_better_than_3_degrees_is_flagged_without_the_hint(
+    design, i, level
+) -> None:
+    # Bench views whose poses without the hint were 3.5-27 degrees off, unflagged: the
+    # pad 55-80 px across shows its tilt by 5.6-11 px a radian, and its points' noise
+    # (0.3 px) leaves it that far off at two sigmas.
+    pad, _, _, view, reference = bench_frames(design, 0, i, level)
+    blind = process_frame(pad, reference, CAM)
+    assert blind.detected and blind.pose is not None
+    assert blind.pose.ambiguous, rotation_error_deg(blind.pose, view.R_pad_cam)
+
+
+@pytest.mark.parametrize("design, i", [("default", 10), ("serif_octagon", 15), ("orange_ring", 0)])
+def test_a_near_pads_pose_without_the_hint_is_not_flagged(design, i) -> None:
+    # Bench views whose pads (1.6-3.3 m away) show their tilt by 30-60 px a radian.
+    pad, _, _, view, reference = bench_frames(design, 0, i, "today")
+    blind = process_frame(pad, reference, CAM)
+    assert blind.detected and blind.pose is not None
+    assert not blind.pose.ambiguous
+    assert rotation_error_deg(blind.pose, view.R_pad_cam) < 1.0
