@@ -1,9 +1,11 @@
-"""A far pad found by its board: the H too small to place, the board around it not.
+"""A pad found by its board: the H too small to place, or spoilt, the board around it not.
 
 From some 15 m on a 640 px frame the H spans under a dozen pixels with legs of
 two: `pipeline.candidates` can no longer place its corners, while its board (the
 square the H is painted on, a sheet of paper) is two to four times wider, and its
-outline is four long straight edges. Around every small mark of the H's polarity
+outline is four long straight edges. Nearer, a glare on the H or a smear across it
+joins it to what is around it, and its outline is no H's; the board's is still four
+edges. Around every small mark of the H's polarity, and the few largest,
 the board is grown: the pixels nearer the board's level (read around the mark) than
 the floor's level around the board (a board lighter or darker than its floor
 alike), as far as they reach; a board that does not stand out of its floor's noise
@@ -39,6 +41,7 @@ MIN_BOARD_CONTRAST = 8.0  # the board against its floor, levels of 0..255
 # 0.10-0.20 on the bench's far views (15-30 dB), 0.62 grown from a real photo's noise.
 MAX_FLOOR_NOISE = 0.35
 MAX_SEEDS = 48  # marks a board is grown around per frame at most
+MAX_LARGE_SEEDS = 4  # and marks too large for their H to be missed for its size
 MAX_BOARDS = 6  # quadrilaterals fitted per frame at most, the most contrasted first
 # A fitted pad counts when its pattern matches the reference's (NCC), and 40 % of its
 # H's sides and 10 % of its board's outline are found where the fit puts them. On the
@@ -86,17 +89,24 @@ def find_boards(
     ratio = reference.pad_over_h
     # The marks of the H's polarity small enough for their H to be missed, and large
     # enough for a board the size of MIN_BOARD_PX around them; on a textured floor
-    # (a thousand of them) the largest first, MAX_SEEDS of them.
+    # (a thousand of them) the largest first, MAX_SEEDS of them. Then the largest
+    # marks whose pad fits in the view, MAX_LARGE_SEEDS of them: an H a glare spoilt
+    # (on the real-world mix's views a glare on the H, or a smear joining it to the
+    # bars beside it, lost 1-4 of 40 pads per design whose board stood out whole).
     most = RELIABLE_H_PX * enlarged
     least = max(MIN_SEED_PX, MIN_BOARD_PX * enlarged / (2.0 * ratio))
-    seeds = []
+    widest = min(levels.shape) / (1.5 * ratio)
+    small, large = [], []
     for region in shapes:
         size = float(np.ptp(region.contour, axis=0).max())
         if least <= size <= most:
-            seeds.append(region)
-    seeds.sort(key=lambda r: -r.area)
+            small.append(region)
+        elif most < size <= widest:
+            large.append(region)
+    small.sort(key=lambda r: -r.area)
+    large.sort(key=lambda r: -r.area)
     boards: list[Board] = []
-    for seed in seeds[:MAX_SEEDS]:
+    for seed in small[:MAX_SEEDS] + large[:MAX_LARGE_SEEDS]:
         for board in _grow_boards(levels, seed.contour, ratio, MIN_BOARD_PX * enlarged):
             if not any(_same(board.quad, b.quad) for b in boards):
                 boards.append(board)
