@@ -1,16 +1,17 @@
 """process_frame: from one camera frame to the H, its invariants and the pose.
 
 Where the pipeline looks: when the caller hands in the last result (``prior``),
-first the H's sides where they were (followed: fitted to the edges nearby, which
-is all a pad moved by a few pixels needs); then a window around where the pad
-was, at a resolution where the H spans about ``TRACK_SPAN_PX``; when that finds
+first the H's sides where the pad's motion between the last two frames takes
+them, then where they were (followed: fitted to the edges nearby, which is all a
+pad moved by a few pixels needs); then a window around where the pad was, at a
+resolution where the H spans about ``TRACK_SPAN_PX``; when that finds
 nothing, the whole frame at a working width of ``SEARCH_WIDTH_PX``, and last
 enlarged toward ``FAR_SEARCH_WIDTH_PX`` (a far pad is too small at the working
 width, and its H's legs of 2 px lose their shape at the frame's own resolution: a
 640 or a 1280 px frame doubled, 1920 px by a third). Whatever finds the H
 (``pipeline.find``), the pad is then measured at the frame's own resolution around
 it, or on the enlarged view that found it (``pipeline.measure``). When no H is
-found, a pad too far for its H to be placed is looked for by its board
+found, a pad whose H is too far to be placed, or spoilt, is looked for by its board
 (``pipeline.board_search``) on the finest view. The result says which way found
 it (``found_by``: "follow", "track", "search" or "board").
 """
@@ -199,7 +200,8 @@ def process_frame(
             return _detected(
                 measured, reference, contour, yaw_hint, way, mask, stages, t_start, prior
             )
-    # Last, a pad too far for its H to be placed, by its board on the finest view.
+    # Last, a pad whose H could not be placed (too far, or spoilt), by its board on the
+    # finest view.
     if far_found is not None:
         far_binary, shapes = far_found
         to_frame = np.linalg.inv(far.matrix)
@@ -287,11 +289,12 @@ def _follow(
     prior: FrameResult | None, image: np.ndarray, reference: Reference, method: str
 ) -> Followed | None:
     """The H followed from the last frame: its sides fitted to the edges near where
-    they were, in a window at the measurement's scale. A pad moves a few pixels
-    between frames; when nearly all of the H's sides are found again (and its size
-    holds), it is the same H, and the search's steps are not needed. A large pad,
-    which moves more pixels, is first followed on a coarser view. Returns None when
-    the search must take over."""
+    its motion since the frame before takes them, else near where they were, in a
+    window at the measurement's scale. A pad moves a few pixels between frames; when
+    nearly all of the H's sides are found again (and its size holds), it is the same
+    H, and the search's steps are not needed. A large pad, which moves more pixels, is
+    followed from where it was on a coarser view first. Returns None when the search
+    must take over."""
     if prior is None or not prior.detected or prior.homography is None:
         return None
     H = prior.homography
