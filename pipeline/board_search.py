@@ -41,7 +41,7 @@ MIN_BOARD_CONTRAST = 8.0  # the board against its floor, levels of 0..255
 # 0.10-0.20 on the bench's far views (15-30 dB), 0.62 grown from a real photo's noise.
 MAX_FLOOR_NOISE = 0.35
 MAX_SEEDS = 48  # marks a board is grown around per frame at most
-MAX_LARGE_SEEDS = 4  # and marks too large for their H to be missed for its size
+MAX_LARGE_SEEDS = 4  # and at most this many marks larger than a far H (a spoilt H's)
 MAX_BOARDS = 6  # quadrilaterals fitted per frame at most, the most contrasted first
 # A fitted pad counts when its pattern matches the reference's (NCC), and 40 % of its
 # H's sides and 10 % of its board's outline are found where the fit puts them. On the
