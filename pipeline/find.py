@@ -87,10 +87,11 @@ class Tally:
     def reason(self) -> str:
         if not self.shapes:
             return "no H-like shape in view"
+        if self.rejected:  # (a board's H too, found where no H was located)
+            return f"the verifier rejected {self.rejected} H-shaped mark(s)"
         if not self.located:
             return f"no H among {self.shapes} bright shape(s)"
         for count, why in (
-            (self.rejected, "the verifier rejected {} H-shaped mark(s)"),
             (self.unclear, "{} H-shaped mark(s), none clearly an H on a plain board"),
             (self.unlike, "{} H-shaped mark(s) that do not look like the reference picture"),
             (self.unframed, "{} H-shaped mark(s) without the pad's board around them"),

@@ -206,6 +206,12 @@ def process_frame(
         far_binary, shapes = far_found
         to_frame = np.linalg.inv(far.matrix)
         for H in find_boards(far_binary.levels, shapes, reference, max(1.0, far.scale)):
+            if verifier is not None:
+                # The verifier judges the H the board puts where it is, as any H.
+                h_px = apply_h(H, reference.corners_m)
+                if not verifier.accepts(h_px, h_px, far.camera(cam)):
+                    tally.rejected += 1
+                    continue
             measured = measure(
                 image, reference, cam, to_frame @ H, gravity=gravity, found=(far, far_binary.levels)
             )

@@ -170,3 +170,21 @@ def test_a_pad_whose_h_a_glare_joined_to_its_board_is_found_by_its_board(design)
     tally.score(True, res.pose, view, get_design(design).symmetric)
     assert tally.pos_pct[0] < 3.0 and tally.rot_deg[0] < 2.0, (tally.pos_pct, tally.rot_deg)
     assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected
+
+
+class _Verdict:
+    def __init__(self, answer: bool) -> None:
+        self.answer, self.seen = answer, 0
+
+    def accepts(self, corners_px, contour_px, camera) -> bool:
+        self.seen += corners_px.shape == (12, 2)
+        return self.answer
+
+
+def test_the_verifier_judges_a_pad_found_by_its_board_too():
+    pad, _, hint, _, reference = bench_frames("default", 0, 26, "real")
+    yes, no = _Verdict(True), _Verdict(False)
+    assert process_frame(pad, reference, CAM, gravity_hint=hint, verifier=yes).found_by == "board"
+    assert yes.seen
+    refused = process_frame(pad, reference, CAM, gravity_hint=hint, verifier=no)
+    assert not refused.detected and "verifier rejected" in refused.reason
