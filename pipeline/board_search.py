@@ -32,7 +32,7 @@ from pipeline.measure import pad_box_m
 from pipeline.preprocess import border_pixels
 from pipeline.reference import RELIABLE_H_PX, Reference
 from pipeline.shapes import Region
-from pipeline.template import MARGIN, pad_pattern
+from pipeline.template import pad_pattern, pattern_box
 
 MIN_BOARD_PX = 12.0  # a board narrower than this (frame pixels) holds too few for its pattern
 MIN_SEED_PX = 3.0  # the H's mark, at least this wide on the view
@@ -258,11 +258,8 @@ def _fit_board(
 
 def _h_pattern(levels: np.ndarray, reference: Reference, H: np.ndarray) -> float:
     """The correlation of the view with the reference over the H's box and a margin
-    (``template.MARGIN`` of its size), nan when too little of it is in view."""
-    lo, hi = reference.corners_m.min(axis=0), reference.corners_m.max(axis=0)
-    room = MARGIN * float((hi - lo).max())
-    (x0, y0), (x1, y1) = lo - room, hi + room
-    around = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+    (`template.pattern_box`), nan when too little of it is in view."""
+    around = pattern_box(reference.corners_m)
     return pad_pattern(levels, reference.template_pyramid, reference.channel_px_per_m, around, H)
 
 

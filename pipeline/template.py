@@ -89,7 +89,7 @@ def compare(
     lo, hi = corners_m.min(axis=0), corners_m.max(axis=0)
     size = float((hi - lo).max())
     outer = _box(lo - BOARD_REACH * size, hi + BOARD_REACH * size)
-    inner = _box(lo - MARGIN * size, hi + MARGIN * size)
+    inner = pattern_box(corners_m)
     outer_px, inner_px = apply_h(H, outer), apply_h(H, inner)
     fh, fw = frame_channel.shape[:2]
     x0, y0 = np.floor(outer_px.min(axis=0)).astype(int)
@@ -228,6 +228,14 @@ def _crop(image: np.ndarray, x0: int, y0: int, x1: int, y1: int, dsize) -> np.nd
     if crop.shape[1] != dsize[0] or crop.shape[0] != dsize[1]:
         crop = cv2.resize(crop, dsize, interpolation=cv2.INTER_AREA)
     return crop
+
+
+def pattern_box(corners_m: np.ndarray) -> np.ndarray:
+    """Where the pattern is compared: the H's bounding box grown by ``MARGIN`` of its
+    size (4 x 2, pad metres)."""
+    lo, hi = corners_m.min(axis=0), corners_m.max(axis=0)
+    size = float((hi - lo).max())
+    return _box(lo - MARGIN * size, hi + MARGIN * size)
 
 
 def _box(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
