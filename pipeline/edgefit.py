@@ -9,7 +9,7 @@ the true edge is located on the gray image across it (strongest gradient of
 the expected polarity, sub-pixel), and the pose is adjusted by Gauss-Newton to
 minimise the distances of those edge points to the projected model edges,
 measured along the edge normals (the classic RAPiD / edge-tracking scheme).
-The projection's Jacobian comes from ``cv2.projectPoints``.
+The projection's Jacobian comes from ``pipeline.planar_projection`` (OpenCV's model).
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ import numpy as np
 
 from pipeline import edge_kernels as kernels
 from pipeline.camera import Camera
+from pipeline.planar_projection import project_plane
 
 MIN_SIDE_PX = 7.0  # sides shorter than this in the image are not sampled
 END_MARGIN = 0.12  # at most this share of a straight side is left out at each end
@@ -70,6 +71,13 @@ class EdgeModel:
         return side, t
 
     @cached_property
+    def ends_normalised(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The sides' starts and ends (2S x 2 metres), and the `normalising` map of them
+        and its inverse (the homography fit's unknowns are conditioned by it)."""
+        ends = np.vstack([self.a_m, self.b_m])
+        return (ends, *normalising(ends))
+
+    @cached_property
     def samples(self) -> tuple[np.ndarray, np.ndarray]:
         """Points along the sides (pad metres, see `sampling`) and the side each lies on."""
         side, t = self.sampling
@@ -109,6 +117,17 @@ class EdgeModel:
         return cls(a, b, np.concatenate(bright), poly, clearance, np.concatenate(curved))
 
 
+def normalising(pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The scale and shift that takes points (N x 2) to about unit size around the
+    origin, and its inverse (3 x 3 each)."""
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    c = pts.mean(axis=0)
+    k = 1.0 / max(float((hi - lo).max()), 1e-9)
+    T = np.array([[k, 0.0, -k * c[0]], [0.0, k, -k * c[1]], [0.0, 0.0, 1.0]])
+    T_inv = np.array([[1.0 / k, 0.0, c[0]], [0.0, 1.0 / k, c[1]], [0.0, 0.0, 1.0]])
+    return T, T_inv
+
+
 @dataclass(frozen=True, eq=False)
 class EdgeFit:
     rvec: np.ndarray
@@ -144,7 +163,7 @@ def fit_edges(
     for it in range(iterations):
         search = search_px if it == 0 else max(1.5, 0.6 * search_px)
         pa, pb, usable = _sides_in_view(model, camera, rvec, tvec, search + 2.0)
-        proj, jac = _project(model.samples[0], rvec, tvec, camera)
+        proj, jac = project_plane(model.samples[0], rvec, tvec, camera)
         step, rms, inliers, sides, ok = kernels.pose_step(
             img, pa, pb, model.bright, model.polygon, model.curved, usable,
             model.samples[1], proj, jac, float(search), MIN_SIDE_PX, kernels.MIN_DROP,
@@ -168,18 +187,11 @@ def edge_support(image: np.ndarray, model: EdgeModel, camera: Camera, rvec, tvec
     the side bars and the board's outline will not be where the pose says.
     """
     pa, pb, usable = _sides_in_view(model, camera, rvec, tvec, 0.0)
-    proj, _ = _project(model.samples[0], rvec, tvec, camera)
+    proj, _ = project_plane(model.samples[0], rvec, tvec, camera)
     return kernels.pose_support(
         np.ascontiguousarray(image, np.float32), pa, pb, model.bright, model.polygon,
         model.curved, usable, model.samples[1], proj, MIN_SIDE_PX, kernels.MIN_DROP,
     )  # fmt: skip
-
-
-def _project(model: np.ndarray, rvec, tvec, camera: Camera):
-    pts = np.column_stack([model, np.zeros(len(model))])
-    proj, jac = cv2.projectPoints(pts, rvec, tvec, camera.K, camera.dist)
-    jac = jac[:, :6].reshape(len(model), 2, 6)
-    return proj.reshape(-1, 2), jac
 
 
 def _clearance_m(
@@ -228,7 +240,7 @@ def _clearance_m(
 def _sides_in_view(model: EdgeModel, camera: Camera, rvec, tvec, min_clearance_px: float):
     """The model's sides' ends in the image, and which sides lie at least
     ``min_clearance_px`` from a side alongside them."""
-    ends, _ = _project(np.vstack([model.a_m, model.b_m]), rvec, tvec, camera)
+    ends, _ = project_plane(np.vstack([model.a_m, model.b_m]), rvec, tvec, camera)
     R, _ = cv2.Rodrigues(rvec)
     depth = 0.5 * (model.a_m + model.b_m) @ R[2, :2] + float(np.asarray(tvec).ravel()[2])
     clearance_px = model.clearance_m * camera.fx / np.maximum(depth, 1e-6)

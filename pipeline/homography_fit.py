@@ -17,7 +17,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pipeline.edge_kernels import MIN_DROP, homography_steps, side_support
-from pipeline.edgefit import EdgeModel
+from pipeline.edgefit import EdgeModel, normalising
+from pipeline.jit import compiled_ieee
 
 MIN_SIDE_PX = 1.0  # a stroke end of a small H may be 2 px: still measured
 DAMPING = 1e-3
@@ -65,11 +66,22 @@ class Deformation:
 
 
 def apply_h(H: np.ndarray, pts: np.ndarray) -> np.ndarray:
-    """Map N x 2 points through a homography."""
-    p = np.asarray(pts, np.float64).reshape(-1, 2)
-    q = p @ H[:2, :2].T + H[:2, 2]
-    w = p @ H[2, :2] + H[2, 2]
-    return q / w[:, None]
+    """Map N x 2 points through a homography (a point it sends to infinity: inf or nan)."""
+    # (contiguous: one compiled signature, the one the warm-up compiles)
+    p = np.ascontiguousarray(pts, np.float64).reshape(-1, 2)
+    return _apply_h(np.ascontiguousarray(H, np.float64), p)
+
+
+@compiled_ieee
+def _apply_h(H, p):
+    # (a frame calls this a few hundred times on a few points: numpy's overhead, compiled out)
+    out = np.empty((p.shape[0], 2))
+    for i in range(p.shape[0]):
+        x, y = p[i, 0], p[i, 1]
+        w = H[2, 0] * x + H[2, 1] * y + H[2, 2]
+        out[i, 0] = (H[0, 0] * x + H[0, 1] * y + H[0, 2]) / w
+        out[i, 1] = (H[1, 0] * x + H[1, 1] * y + H[1, 2]) / w
+    return out
 
 
 def affine_part(H: np.ndarray, centre_m: np.ndarray) -> np.ndarray:
@@ -134,17 +146,12 @@ def fit_homography(
     img = np.ascontiguousarray(image, np.float32)
     H = np.asarray(H0, np.float64) / H0[2, 2]
     # Condition the unknowns: pad metres and pixels both scaled to ~unit size.
-    ends = np.vstack([model.a_m, model.b_m])
-    cm = ends.mean(axis=0)
-    sm = 1.0 / max(float(np.ptp(ends, axis=0).max()), 1e-9)
-    Tm = np.array([[sm, 0, -sm * cm[0]], [0, sm, -sm * cm[1]], [0, 0, 1]])
+    ends, Tm, Tm_inv = model.ends_normalised
     proj0 = apply_h(H, ends)
     if not np.all(np.isfinite(proj0)):
         return None
-    cp = proj0.mean(axis=0)
-    sp = 1.0 / max(float(np.ptp(proj0, axis=0).max()), 1e-9)
-    Tp = np.array([[sp, 0, -sp * cp[0]], [0, sp, -sp * cp[1]], [0, 0, 1]])
-    Hn = Tp @ H @ np.linalg.inv(Tm)
+    Tp, Tp_inv = normalising(proj0)
+    Hn = Tp @ H @ Tm_inv
     h0 = (Hn / Hn[2, 2]).ravel()[:8].copy()
     side, t = model.sampling
     deform = deform or Deformation.none(len(model.a_m))
@@ -174,7 +181,7 @@ def fit_homography(
     )
     if not ok:
         return None
-    H = np.linalg.inv(Tp) @ np.append(h, 1.0).reshape(3, 3) @ Tm
+    H = Tp_inv @ np.append(h, 1.0).reshape(3, 3) @ Tm
     H = H / H[2, 2]
     seen = np.isfinite(found)
     share = float(found[seen].mean()) if seen.any() else 0.0

@@ -12,6 +12,8 @@ from __future__ import annotations
 import numba
 
 compiled = numba.njit(cache=True, nogil=True)
+# ... and where a division by zero must give inf or nan, as numpy's does, not raise
+compiled_ieee = numba.njit(cache=True, nogil=True, error_model="numpy")
 
 
 @compiled

@@ -7,6 +7,7 @@ import numpy as np
 
 from pipeline.camera import Camera
 from pipeline.jit import compiled, solve
+from pipeline.planar_projection import project_plane
 from pipeline.result import Pose, yaw_of
 
 # A 180 degree turn about the pad's z axis.
@@ -141,7 +142,7 @@ def refine_with_gravity(
     >>> bool(np.abs(to_pose(r1, t1, 0.0, True).position_m - [0.2, -0.1, 5.0]).max() < 1e-3)
     True
     """
-    obj = _object(points_m)
+    pts = np.asarray(points_m, np.float64).reshape(-1, 2)
     img = np.asarray(image_px, np.float64).reshape(-1, 2)
     g = np.asarray(gravity_cam, np.float64).reshape(3)
     g = g / np.linalg.norm(g)
@@ -150,9 +151,9 @@ def refine_with_gravity(
     w_px = 1.0 / sigma_px
     w_g = 1.0 / np.radians(sigma_deg)
     for _ in range(iterations):
-        proj, jac = cv2.projectPoints(obj, r, t, camera.K, camera.dist)
+        proj, jac = project_plane(pts, r, t, camera)
         R, dR = cv2.Rodrigues(r)  # dR: d(R's 9 entries, row by row) / d(rvec), 3 x 9
-        step, solved = _gravity_step(proj.reshape(-1, 2), jac, img, R, dR, g, w_px, w_g)
+        step, solved = _gravity_step(proj, jac.reshape(-1, 6), img, R, dR, g, w_px, w_g)
         if not solved:
             break
         r += step[:3]
@@ -165,9 +166,10 @@ def refine_with_gravity(
 @compiled
 def _gravity_step(proj, jac, img, R, dR, g, w_px, w_g):
     """`refine_with_gravity`'s Gauss-Newton step over (rvec, tvec): the reprojection
-    errors (``proj`` - ``img``, their Jacobian ``jac`` from cv2.projectPoints) weighed
-    by ``w_px``, and the pad's up (R's third column) against gravity's opposite by
-    ``w_g`` (its Jacobian the third column's rows of ``dR``, cv2.Rodrigues')."""
+    errors (``proj`` - ``img``; ``jac``, their derivatives by the pose, a row per
+    pixel coordinate) weighed by ``w_px``, and the pad's up (R's third column)
+    against gravity's opposite by ``w_g`` (its Jacobian the third column's rows of
+    ``dR``, cv2.Rodrigues')."""
     A = np.zeros((6, 6))
     b = np.zeros(6)
     n = img.shape[0]

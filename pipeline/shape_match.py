@@ -20,6 +20,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from pipeline.jit import compiled
+
 GRID = 40  # raster cells a side
 EXTENT = 2.6  # whitened units from the centre to the grid's edge
 STEPS = 120  # rotations tried over a full turn (3 degrees)
@@ -90,26 +92,33 @@ class ShapeMatcher:
         if not len(cells):
             return out
         rastered = np.nonzero(np.all(np.isfinite(whiten), axis=(1, 2)))[0]
-        todo = [(int(index[k]), centres[k], whiten[k]) for k in rastered]
         cand = cells.reshape(len(cells), -1).T.astype(np.float32)  # (GRID * GRID, regions)
         inter = self.rasters @ cand
         iou = inter / np.maximum(self.areas[:, None] + cand.sum(axis=0)[None, :] - inter, 1e-9)
         best = np.argmax(iou, axis=0)
-        best_iou = iou[best, np.arange(len(todo))]
+        best_iou = iou[best, np.arange(len(rastered))]
         order = np.argsort(-best_iou, kind="stable")
         if top is not None:
             order = order[:top]
-        step = self.angles[1] - self.angles[0]
-        for j in order:
-            k = int(best[j])
-            if best_iou[j] < min_iou:
-                break
-            i, mean, w = todo[j]
-            angle = self.angles[k] + _peak_offset(iou[:, j], k) * step
-            # frame = mean + W_c^-1 R(angle) W_r F (m - mean_r)
-            lin = _inv2(w) @ _rot(angle) @ self.whiten @ _FLIP
-            t = mean - lin @ (self.mean_m @ _FLIP)
-            out[i] = ShapeMatch(float(best_iou[j]), np.hstack([lin, t[:, None]]))
+        order = order[best_iou[order] >= min_iou]
+        if not len(order):
+            return out
+        # All the matches' maps at once: frame = mean + W_c^-1 R(angle) W_r F (m - mean_r).
+        k = best[order]
+        n = len(self.angles)
+        a, b, c = iou[(k - 1) % n, order], iou[k, order], iou[(k + 1) % n, order]
+        angle = self.angles[k] + _peak_offsets(a, b, c) * (self.angles[1] - self.angles[0])
+        cos, sin = np.cos(angle), np.sin(angle)
+        turn = np.stack([np.stack([cos, -sin], -1), np.stack([sin, cos], -1)], 1)
+        w = whiten[rastered[order]]
+        det = w[:, 0, 0] * w[:, 1, 1] - w[:, 0, 1] * w[:, 1, 0]
+        adjugate = np.stack([np.stack([w[:, 1, 1], -w[:, 0, 1]], -1),
+                             np.stack([-w[:, 1, 0], w[:, 0, 0]], -1)], 1)  # fmt: skip
+        lin = (adjugate / det[:, None, None]) @ turn @ (self.whiten @ _FLIP)
+        t = centres[rastered[order]] - lin @ (self.mean_m @ _FLIP)
+        affine = np.concatenate([lin, t[:, :, None]], axis=2)
+        for q, j in enumerate(order):
+            out[int(index[rastered[j]])] = ShapeMatch(float(best_iou[j]), affine[q])
         return out
 
 
@@ -118,51 +127,76 @@ def _whitened_rasters(polygons: list[np.ndarray]):
     (as `_raster` fills one), in one pass over all their points: their centroids
     (K x 2), whitening maps (K x 2 x 2, nan for a degenerate polygon) and the
     rasters of those that are not degenerate (in order)."""
-    counts = np.array([len(p) for p in polygons])
-    start = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    pts = np.concatenate(polygons)
-    nxt = np.roll(pts, -1, axis=0)
-    nxt[start + counts - 1] = pts[start]  # each polygon closes on its first point
-    x, y, x1, y1 = pts[:, 0], pts[:, 1], nxt[:, 0], nxt[:, 1]
-    cross = x * y1 - x1 * y
-    # Green's theorem: the moments of the area inside each polygon.
-    m00, m10, m01, m20, m02, m11 = (
-        np.add.reduceat(v * cross, start) / k
-        for v, k in (
-            (1.0, 2.0),
-            (x + x1, 6.0),
-            (y + y1, 6.0),
-            (x * x + x * x1 + x1 * x1, 12.0),
-            (y * y + y * y1 + y1 * y1, 12.0),
-            (x * y1 + 2.0 * x * y + 2.0 * x1 * y1 + x1 * y, 24.0),
-        )
-    )
-    with np.errstate(invalid="ignore", divide="ignore"):
-        safe = np.where(np.abs(m00) < 1e-12, np.nan, m00)
-        mean = np.column_stack([m10 / safe, m01 / safe])
-        a = (m20 / safe) - mean[:, 0] ** 2
-        b = (m11 / safe) - mean[:, 0] * mean[:, 1]
-        d = (m02 / safe) - mean[:, 1] ** 2
-        ok = np.isfinite(a + b + d) & (a * d - b * b > 1e-9)
-        # The inverse square root of each covariance, in closed form (`_inv_sqrt`).
-        sq = np.sqrt(np.maximum(a * d - b * b, 1e-24))
-        t = np.sqrt(a + d + 2.0 * sq)
-        p, q, r = (a + sq) / t, b / t, (d + sq) / t
-        det = p * r - q * q
-        whiten = np.stack([np.stack([r, -q], -1), np.stack([-q, p], -1)], 1) / det[:, None, None]
-    ok &= np.all(np.isfinite(whiten), axis=(1, 2))
-    whiten[~ok] = np.nan
-    region = np.repeat(np.arange(len(polygons)), counts)
-    centred = pts - np.nan_to_num(mean)[region]
-    w = np.nan_to_num(whiten)[region]
-    whitened = np.einsum("nij,nj->ni", w, centred)
-    grid = np.round(((whitened + EXTENT) * (GRID / (2 * EXTENT)) - 0.5) * (1 << _SHIFT))
-    grid = np.clip(grid, -(1 << 20), 1 << 20).astype(np.int32)
+    counts = np.array([len(p) for p in polygons], np.int64)
+    start = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+    mean, whiten, ok, grid = _whiten(np.concatenate(polygons), start, counts)
     cells = np.zeros((int(ok.sum()), GRID, GRID), np.uint8)
-    for k, i in enumerate(np.nonzero(ok)[0]):
+    for k, i in enumerate(np.flatnonzero(ok)):
         poly = grid[start[i] : start[i] + counts[i]].reshape(-1, 1, 2)
         cv2.fillPoly(cells[k], [poly], 1, lineType=cv2.LINE_8, shift=_SHIFT)
     return mean, whiten, cells
+
+
+@compiled
+def _whiten(pts, start, counts):
+    """`_whitened_rasters`' arithmetic: per polygon its centroid, whitening map (the
+    inverse square root of its covariance in closed form, see `_inv_sqrt`; nan when
+    degenerate) and whether it is not degenerate; per point, its fillPoly coordinates
+    on the grid (whitened, ``_SHIFT`` sub-pixel bits)."""
+    k = len(counts)
+    mean = np.full((k, 2), np.nan)
+    whiten = np.full((k, 2, 2), np.nan)
+    ok = np.zeros(k, np.bool_)
+    grid = np.empty((len(pts), 2), np.int32)
+    to_grid = GRID / (2.0 * EXTENT)
+    unit = float(1 << _SHIFT)
+    for j in range(k):
+        s, n = start[j], counts[j]
+        # Green's theorem: the moments of the area inside the polygon.
+        m00 = m10 = m01 = m20 = m02 = m11 = 0.0
+        for q in range(n):
+            x, y = pts[s + q, 0], pts[s + q, 1]
+            nq = s + q + 1 if q + 1 < n else s  # (each polygon closes on its first point)
+            x1, y1 = pts[nq, 0], pts[nq, 1]
+            cross = x * y1 - x1 * y
+            m00 += cross
+            m10 += (x + x1) * cross
+            m01 += (y + y1) * cross
+            m20 += (x * x + x * x1 + x1 * x1) * cross
+            m02 += (y * y + y * y1 + y1 * y1) * cross
+            m11 += (x * y1 + 2.0 * x * y + 2.0 * x1 * y1 + x1 * y) * cross
+        m00 /= 2.0
+        cx, cy = 0.0, 0.0
+        w00, w01, w11 = 0.0, 0.0, 0.0
+        if abs(m00) >= 1e-12:
+            cx, cy = m10 / 6.0 / m00, m01 / 6.0 / m00
+            a = m20 / 12.0 / m00 - cx * cx
+            b = m11 / 24.0 / m00 - cx * cy
+            d = m02 / 12.0 / m00 - cy * cy
+            mean[j, 0], mean[j, 1] = cx, cy
+            if math.isfinite(a + b + d) and a * d - b * b > 1e-9:
+                sq = math.sqrt(a * d - b * b)
+                t = math.sqrt(a + d + 2.0 * sq)
+                p, q_, r = (a + sq) / t, b / t, (d + sq) / t
+                det = p * r - q_ * q_
+                w00, w01, w11 = r / det, -q_ / det, p / det
+                if math.isfinite(w00) and math.isfinite(w01) and math.isfinite(w11):
+                    ok[j] = True
+                    whiten[j, 0, 0], whiten[j, 0, 1] = w00, w01
+                    whiten[j, 1, 0], whiten[j, 1, 1] = w01, w11
+                else:
+                    w00, w01, w11 = 0.0, 0.0, 0.0
+        for q in range(n):
+            x, y = pts[s + q, 0] - cx, pts[s + q, 1] - cy
+            grid[s + q, 0] = _grid_coordinate(w00 * x + w01 * y, to_grid, unit)
+            grid[s + q, 1] = _grid_coordinate(w01 * x + w11 * y, to_grid, unit)
+    return mean, whiten, ok, grid
+
+
+@compiled
+def _grid_coordinate(v, to_grid, unit):
+    g = np.rint(((v + EXTENT) * to_grid - 0.5) * unit)
+    return np.int32(min(max(g, -float(1 << 20)), float(1 << 20)))
 
 
 def _polygon_moments(poly: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -206,9 +240,9 @@ def _raster(whitened: np.ndarray) -> np.ndarray:
     return img.astype(np.float32)
 
 
-def _peak_offset(values: np.ndarray, k: int) -> float:
-    """Sub-step offset of a circular array's maximum at ``k`` (parabola through 3 points)."""
-    n = len(values)
-    a, b, c = values[(k - 1) % n], values[k], values[(k + 1) % n]
+def _peak_offsets(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Sub-step offsets of maxima ``b`` between their neighbours ``a`` and ``c``
+    (a parabola through the three)."""
     den = a - 2 * b + c
-    return float(np.clip(0.5 * (a - c) / den, -0.5, 0.5)) if abs(den) > 1e-12 else 0.0
+    safe = np.where(np.abs(den) > 1e-12, den, 1.0)
+    return np.where(np.abs(den) > 1e-12, np.clip(0.5 * (a - c) / safe, -0.5, 0.5), 0.0)

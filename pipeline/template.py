@@ -42,7 +42,8 @@ PICK_BLUR_PX = 1.0  # where the board's and the H's levels are read: pixels this
 PAIR_BLUR_PX = 1.0  # the levels read pixel by pixel, smoothed this much for the noise
 _LUMA = np.array([0.114, 0.587, 0.299])
 # BGR BGR -> luma luma: the frame's and the reference's side by side.
-_LUMA_PAIR = np.kron(np.eye(2), _LUMA[:, None]).astype(np.float32)
+_LUMA_ROW = _LUMA[None].astype(np.float32)  # (cv2.transform's B, G, R -> luma)
+_LUMA_ROW4 = np.append(_LUMA, 0.0)[None].astype(np.float32)  # (the 4th: the channel)
 
 
 @dataclass(frozen=True)
@@ -128,11 +129,14 @@ def compare(
     # The frame's colours beside the reference's: one median per pixel set (the
     # board's brightness, pixel by pixel).
     frame_crop = _crop(frame_bgr, x0, y0, x1, y1, dsize)
-    both = np.concatenate([frame_crop, warped[..., :3]], axis=2)
-    pixels, on_board = both.reshape(-1, 6), np.flatnonzero(board)
-    b_f, b_r = np.split(_column_medians(pixels[on_board[:: _stride(len(on_board))]]), 2)
-    p_f = _column_medians(pixels[np.flatnonzero(paint), :3])
-    lumas = _blurred(both @ _LUMA_PAIR, seen, PAIR_BLUR_PX)  # the frame's, the reference's
+    frame_px, ref_px = frame_crop.reshape(-1, 3), warped.reshape(-1, 4)
+    on_board = np.flatnonzero(board)
+    some = on_board[:: _stride(len(on_board))]
+    b_f, b_r = np.split(_column_medians(np.hstack([frame_px[some], ref_px[some, :3]])), 2)
+    p_f = _column_medians(frame_px[np.flatnonzero(paint)])
+    # The frame's luma and the reference's, side by side.
+    lumas = cv2.merge([cv2.transform(frame_crop, _LUMA_ROW), cv2.transform(warped, _LUMA_ROW4)])
+    lumas = _blurred(lumas, seen, PAIR_BLUR_PX)
     level, reference_level = _paired_relative(
         lumas.reshape(-1, 2), on_board, _nearest_paint(board, paint)
     )
@@ -270,9 +274,9 @@ def _paired_relative(
     the board, in the frame and on the reference (``lumas``: pixels x 2; ``board``
     and ``nearest``: pixel indices): a shadow across the pad darkens a board pixel
     and its paint alike."""
-    b, p = lumas.T[:, board], lumas.T[:, nearest]
+    b, p = lumas[board], lumas[nearest]
     ratios = b / np.maximum(np.maximum(b, p), 1.0)
-    frame, picture = np.median(ratios, axis=1)
+    frame, picture = _column_medians(ratios)
     return float(frame), float(picture)
 
 

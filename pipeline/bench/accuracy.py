@@ -64,9 +64,10 @@ def run(
                 tally.score(False, None, view, d.symmetric)
                 tally.false_positive(False)
                 continue
+            # The attitude comes with the frame (the vehicle's): not the pipeline's time.
+            g = gravity_hint(view.R_pad_cam, [seed, i, 11]) if hint else None
             t0 = time.perf_counter()
             # No yaw hint: a symmetric pad's twin counts as right, see Tally.score.
-            g = gravity_hint(view.R_pad_cam, [seed, i, 11]) if hint else None
             res = process_frame(frame, reference, camera, method=method, gravity_hint=g)
             tally.time(time.perf_counter() - t0, res.timings_ms)
             tally.score(res.detected and res.pose is not None, res.pose, view, d.symmetric)
