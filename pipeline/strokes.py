@@ -12,9 +12,9 @@ stroke widths than the pad in view still samples paint.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
-import cv2
 import numpy as np
 
 from pipeline.homography_fit import apply_h
@@ -82,20 +82,48 @@ def stroke_samples(
     )
 
 
-def _sample(image: np.ndarray, pts: np.ndarray) -> np.ndarray:
-    p = pts.reshape(-1, 2)
-    # Only the pixels around the points are converted, not a whole frame per H (cut
-    # at the image's own edges, the crop's replicated border is the image's).
-    h, w = image.shape[:2]
-    seen = p[np.isfinite(p).all(axis=1)]
-    x0, y0, x1, y1 = 0, 0, w, h
-    if len(seen):
-        x0, y0 = np.clip(np.floor(seen.min(axis=0)) - 1, 0, [w - 1, h - 1]).astype(int)
-        x1, y1 = np.clip(np.ceil(seen.max(axis=0)) + 2, [x0 + 1, y0 + 1], [w, h]).astype(int)
-    crop = image[y0:y1, x0:x1].astype(np.float32)
-    q = (p - [x0, y0]).astype(np.float32)
-    out = cv2.remap(crop, q[:, :1], q[:, 1:], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    return out.reshape(len(p), -1)
+def _sample(image: np.ndarray, pts: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """``weights . pixel`` at each point (N x 2), bilinear, the image's border
+    replicated; nan at points that are not finite."""
+    p = np.ascontiguousarray(pts, np.float64).reshape(-1, 2)
+    x0 = y0 = 0
+    if not image.flags.c_contiguous:
+        # A window's pixels in place: only those around the points are copied (cut at
+        # the image's own edges, the crop's replicated border is the image's).
+        h, w = image.shape[:2]
+        seen = p[np.isfinite(p).all(axis=1)]
+        x1, y1 = w, h
+        if len(seen):
+            x0, y0 = np.clip(np.floor(seen.min(axis=0)) - 1, 0, [w - 1, h - 1]).astype(int)
+            x1, y1 = np.clip(np.ceil(seen.max(axis=0)) + 2, [x0 + 1, y0 + 1], [w, h]).astype(int)
+        image = np.ascontiguousarray(image[y0:y1, x0:x1])
+        p = p - [x0, y0]
+    weights = np.asarray(weights, np.float64).reshape(-1)
+    if image.ndim == 2:  # (a gray picture: every channel alike)
+        image, weights = image[..., None], np.array([weights.sum()])
+    return _weighted_bilinear(image, p, weights)
+
+
+@compiled
+def _weighted_bilinear(img, pts, weights):
+    h, w, c = img.shape
+    out = np.empty(pts.shape[0])
+    for i in range(pts.shape[0]):
+        x, y = pts[i, 0], pts[i, 1]
+        if not (math.isfinite(x) and math.isfinite(y)):
+            out[i] = np.nan
+            continue
+        fx, fy = math.floor(x), math.floor(y)
+        ax, ay = x - fx, y - fy
+        x0, x1 = min(max(int(fx), 0), w - 1), min(max(int(fx) + 1, 0), w - 1)
+        y0, y1 = min(max(int(fy), 0), h - 1), min(max(int(fy) + 1, 0), h - 1)
+        acc = 0.0
+        for k in range(c):
+            top = img[y0, x0, k] * (1.0 - ax) + img[y0, x1, k] * ax
+            bottom = img[y1, x0, k] * (1.0 - ax) + img[y1, x1, k] * ax
+            acc += weights[k] * (top * (1.0 - ay) + bottom * ay)
+        out[i] = acc
+    return out
 
 
 def paint_and_board(
@@ -105,10 +133,8 @@ def paint_and_board(
     (the brightest across the stroke; the darker board side), without offset:
     a change of exposure scales both. Board values are nan where no side is board."""
     paint, side_a, side_b, a_ok, b_ok, _ = samples
-    w = np.asarray(weights, np.float64)
     k, m = paint.shape[:2]
-    v = _sample(image, np.vstack([paint.reshape(-1, 2), side_a, side_b])) @ w.reshape(-1, 1)
-    v = v.ravel()
+    v = _sample(image, np.vstack([paint.reshape(-1, 2), side_a, side_b]), weights)
     centre = v[: k * m].reshape(k, m).max(axis=0)
     va = np.where(a_ok, v[k * m : k * m + m], np.inf)
     vb = np.where(b_ok, v[k * m + m :], np.inf)

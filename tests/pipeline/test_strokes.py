@@ -54,3 +54,20 @@ def test_a_small_h_in_a_noisy_frame_is_not_taken_for_a_cut_one():
     # their middles; the deepest dip came to 0.52, over MAX_DIP, and the pad was
     # refused as a broken H.
     assert score_bench_frames("paper_ring", (76,)).detected == 1
+
+
+def test_a_window_of_the_frame_and_a_gray_frame_read_the_strokes_alike():
+    # A window cut out of a frame (its rows not contiguous) and the frame itself; a gray
+    # picture and the same picture with three equal channels.
+    weights = np.array([0.114, 0.587, 0.299])
+    frame = _draw(True)
+    whole = deepest_dip(frame, weights, stroke_samples(H_M, A, _not_paint))
+    shift = np.array([[1.0, 0.0, -100.0], [0.0, 1.0, -60.0], [0.0, 0.0, 1.0]])
+    window = frame[60:420, 100:560]
+    assert not window.flags.c_contiguous
+    in_window = stroke_samples(H_M, shift @ A, _not_paint)
+    assert abs(deepest_dip(window, weights, in_window) - whole) < 1e-9
+    gray = frame[..., 1].copy()
+    three = np.dstack([gray] * 3)
+    samples = stroke_samples(H_M, A, _not_paint)
+    assert abs(deepest_dip(gray, weights, samples) - deepest_dip(three, weights, samples)) < 1e-9
