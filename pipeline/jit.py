@@ -4,12 +4,14 @@ threads run while a frame is measured.
 
 Loops over a few hundred numbers written as numpy expressions spend their time in
 the calls' overhead, not in the arithmetic; compiled, they cost what the arithmetic
-costs. ``solve`` is the small linear solve their Gauss-Newton steps share.
+costs. ``solve`` is the small linear solve their Gauss-Newton steps share, and
+``column_medians`` the medians the pattern comparison takes.
 """
 
 from __future__ import annotations
 
 import numba
+import numpy as np
 
 compiled = numba.njit(cache=True, nogil=True)
 # ... and where a division by zero must give inf or nan, as numpy's does, not raise
@@ -45,3 +47,17 @@ def solve(A, b):
             acc -= M[c, k] * x[k]
         x[c] = acc / M[c, c]
     return x, True
+
+
+@compiled
+def column_medians(rows):
+    """The median of each column of ``rows`` (N x K, N >= 1), as ``np.median(rows,
+    axis=0)`` (float64)."""
+    n, k = rows.shape
+    out = np.empty(k)
+    column = np.empty(n, rows.dtype)
+    for c in range(k):
+        for i in range(n):
+            column[i] = rows[i, c]
+        out[c] = np.median(column)
+    return out

@@ -165,16 +165,28 @@ def _dip_and_noise(image: np.ndarray, weights, samples) -> tuple[float, float]:
     (its standard deviation, from the median step between neighbours), both as
     shares of the contrast; nan when no board lies beside the strokes."""
     centre, board = paint_and_board(image, weights, samples)
-    ok = np.isfinite(board)
-    if not ok.any():
-        return float("nan"), float("nan")
-    contrast = float(np.median(centre) - np.median(board[ok]))
+    return _dip_and_noise_of(centre, board, np.asarray(samples[5], np.int64))
+
+
+@compiled
+def _dip_and_noise_of(centre, board, counts):
+    """`_dip_and_noise` from the middles' and the board's values (nan: no board)."""
+    on_board = board[np.isfinite(board)]
+    if not len(on_board):
+        return np.nan, np.nan
+    contrast = np.median(centre) - np.median(on_board)
     if contrast <= 0:
         return 1.0, 0.0
-    counts = np.asarray(samples[5], np.int64)
-    steps = np.delete(np.diff(centre), np.cumsum(counts)[:-1] - 1)  # (within strokes)
-    # A step between two points holds the noise of both: median |step| = 0.954 sigma.
-    noise = float(np.median(np.abs(steps))) / 0.954 / contrast
+    # Steps between neighbours within each stroke; one between two points holds the
+    # noise of both: median |step| = 0.954 sigma.
+    steps = np.empty(len(centre) - len(counts))
+    q = start = 0
+    for n in counts:
+        for i in range(n - 1):
+            steps[q] = abs(centre[start + i + 1] - centre[start + i])
+            q += 1
+        start += n
+    noise = np.median(steps) / 0.954 / contrast
     return _deepest_dip(centre, counts, contrast), noise
 
 
