@@ -200,17 +200,17 @@ def _warp(
 
 def _blurred(channel: np.ndarray, seen: np.ndarray, sigma: float) -> np.ndarray:
     """A warped channel (or channels, H x W x C) blurred by ``sigma`` pixels within the
-    reference picture (what lies outside it is no colour to blur in)."""
+    reference picture (what lies outside it is no colour to blur in); only its pixels
+    in the picture (``seen``) are meaningful, the only ones the comparison reads."""
     if sigma < 0.2:
         return channel
     if seen.all():  # (the weights all one: a plain blur)
         return cv2.GaussianBlur(channel, (0, 0), sigma)
     w = seen.astype(np.float32)
-    den = cv2.GaussianBlur(w, (0, 0), sigma)
+    den = np.maximum(cv2.GaussianBlur(w, (0, 0), sigma), 1e-6)
     if channel.ndim == 3:  # (channels side by side)
-        w, den, seen = w[..., None], den[..., None], seen[..., None]
-    num = cv2.GaussianBlur(channel * w, (0, 0), sigma)
-    return np.where(seen, num / np.maximum(den, 1e-6), channel)
+        w, den = w[..., None], den[..., None]
+    return cv2.GaussianBlur(channel * w, (0, 0), sigma) / den
 
 
 def _percentiles(values: np.ndarray, q: tuple[float, ...]) -> np.ndarray:
