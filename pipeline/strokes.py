@@ -106,6 +106,7 @@ def _sample(image: np.ndarray, pts: np.ndarray, weights: np.ndarray) -> np.ndarr
 
 @compiled
 def _weighted_bilinear(img, pts, weights):
+    """`_sample` on an H x W x C image (its channels weighed by ``weights``)."""
     h, w, c = img.shape
     out = np.empty(pts.shape[0])
     for i in range(pts.shape[0]):

@@ -42,7 +42,6 @@ FRAME_BLUR_PX = 0.6
 PICK_BLUR_PX = 1.0  # where the board's and the H's levels are read: pixels this blur leaves pure
 PAIR_BLUR_PX = 1.0  # the levels read pixel by pixel, smoothed this much for the noise
 _LUMA = np.array([0.114, 0.587, 0.299])
-# BGR BGR -> luma luma: the frame's and the reference's side by side.
 _LUMA_ROW = _LUMA[None].astype(np.float32)  # (cv2.transform's B, G, R -> luma)
 _LUMA_ROW4 = np.append(_LUMA, 0.0)[None].astype(np.float32)  # (the 4th: the channel)
 
