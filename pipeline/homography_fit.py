@@ -67,9 +67,14 @@ class Deformation:
 
 def apply_h(H: np.ndarray, pts: np.ndarray) -> np.ndarray:
     """Map N x 2 points through a homography (a point it sends to infinity: inf or nan)."""
-    # (contiguous: one compiled signature, the one the warm-up compiles)
-    p = np.ascontiguousarray(pts, np.float64).reshape(-1, 2)
-    return _apply_h(np.ascontiguousarray(H, np.float64), p)
+    return _apply_h(_plain(H), _plain(pts).reshape(-1, 2))
+
+
+def _plain(a) -> np.ndarray:
+    """``a`` as a contiguous, writable float64 array (a copy only when it is not one):
+    the one compiled signature, the one the warm-up compiles."""
+    out = np.ascontiguousarray(a, np.float64)
+    return out if out.flags.writeable else out.copy()
 
 
 @compiled_ieee

@@ -23,8 +23,10 @@ def project_plane(
     """Pad points (N x 2 metres, z = 0) in the image (N x 2 pixels) and their
     derivatives by the pose's rotation vector and translation (N x 2 x 6), as
     ``cv2.projectPoints`` gives them."""
-    # (fresh contiguous arrays: one compiled signature, the one the warm-up compiles)
+    # (contiguous writable arrays: one compiled signature, the one the warm-up compiles)
     pts = np.ascontiguousarray(pts_m, np.float64).reshape(-1, 2)
+    if not pts.flags.writeable:
+        pts = pts.copy()
     r = np.array(rvec, np.float64).reshape(3)
     t = np.array(tvec, np.float64).reshape(3)
     dist = camera.dist

@@ -87,9 +87,10 @@ def _sample(image: np.ndarray, pts: np.ndarray, weights: np.ndarray) -> np.ndarr
     replicated; nan at points that are not finite."""
     p = np.ascontiguousarray(pts, np.float64).reshape(-1, 2)
     x0 = y0 = 0
-    if not image.flags.c_contiguous:
-        # A window's pixels in place: only those around the points are copied (cut at
-        # the image's own edges, the crop's replicated border is the image's).
+    if not (image.flags.c_contiguous and image.flags.writeable):
+        # A window's pixels (or a read-only picture's, which would need a compiled
+        # variant of its own): only those around the points are copied (cut at the
+        # image's own edges, the crop's replicated border is the image's).
         h, w = image.shape[:2]
         seen = p[np.isfinite(p).all(axis=1)]
         x1, y1 = w, h

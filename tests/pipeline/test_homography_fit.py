@@ -13,6 +13,9 @@ def test_points_map_through_a_homography_as_the_matrix_says():
     assert np.allclose(apply_h(H.T.copy().T, pts[:, ::-1][:, ::-1]), q[:, :2] / q[:, 2:])
     assert apply_h(H.astype(np.float32), [1, 2]).shape == (1, 2)
     assert apply_h(H, np.zeros((0, 2))).shape == (0, 2)
+    frozen = pts.copy()
+    frozen.setflags(write=False)
+    assert np.array_equal(apply_h(H, frozen), apply_h(H, pts))
 
 
 def test_a_point_the_homography_sends_to_infinity_is_not_finite_and_no_error():

@@ -56,9 +56,9 @@ def test_a_small_h_in_a_noisy_frame_is_not_taken_for_a_cut_one():
     assert score_bench_frames("paper_ring", (76,)).detected == 1
 
 
-def test_a_window_of_the_frame_and_a_gray_frame_read_the_strokes_alike():
-    # A window cut out of a frame (its rows not contiguous) and the frame itself; a gray
-    # picture and the same picture with three equal channels.
+def test_a_window_a_read_only_frame_and_a_gray_one_read_the_strokes_alike():
+    # A window cut out of a frame (its rows not contiguous), a read-only copy and the
+    # frame itself; a gray picture and the same picture with three equal channels.
     weights = np.array([0.114, 0.587, 0.299])
     frame = _draw(True)
     whole = deepest_dip(frame, weights, stroke_samples(H_M, A, _not_paint))
@@ -67,6 +67,9 @@ def test_a_window_of_the_frame_and_a_gray_frame_read_the_strokes_alike():
     assert not window.flags.c_contiguous
     in_window = stroke_samples(H_M, shift @ A, _not_paint)
     assert abs(deepest_dip(window, weights, in_window) - whole) < 1e-9
+    frozen = frame.copy()
+    frozen.setflags(write=False)
+    assert deepest_dip(frozen, weights, stroke_samples(H_M, A, _not_paint)) == whole
     gray = frame[..., 1].copy()
     three = np.dstack([gray] * 3)
     samples = stroke_samples(H_M, A, _not_paint)
