@@ -18,7 +18,7 @@ import numpy as np
 
 from pipeline.edge_kernels import MIN_DROP, homography_steps, side_support
 from pipeline.edgefit import EdgeModel, normalising
-from pipeline.jit import compiled_ieee
+from pipeline.jit import compiled_ieee, plain
 
 MIN_SIDE_PX = 1.0  # a stroke end of a small H may be 2 px: still measured
 DAMPING = 1e-3
@@ -67,14 +67,7 @@ class Deformation:
 
 def apply_h(H: np.ndarray, pts: np.ndarray) -> np.ndarray:
     """Map N x 2 points through a homography (a point it sends to infinity: inf or nan)."""
-    return _apply_h(_plain(H), _plain(pts).reshape(-1, 2))
-
-
-def _plain(a) -> np.ndarray:
-    """``a`` as a contiguous, writable float64 array (a copy only when it is not one):
-    the one compiled signature, the one the warm-up compiles."""
-    out = np.ascontiguousarray(a, np.float64)
-    return out if out.flags.writeable else out.copy()
+    return _apply_h(plain(H), plain(pts).reshape(-1, 2))
 
 
 @compiled_ieee

@@ -18,6 +18,14 @@ compiled = numba.njit(cache=True, nogil=True)
 compiled_ieee = numba.njit(cache=True, nogil=True, error_model="numpy")
 
 
+def plain(a, dtype=np.float64) -> np.ndarray:
+    """``a`` as a contiguous, writable array of ``dtype`` (a copy only when it is not
+    one): what the compiled loops take, so that each has one signature, the one the
+    warm-up compiles (a read-only or strided input would compile another at run time)."""
+    out = np.ascontiguousarray(a, dtype)
+    return out if out.flags.writeable else out.copy()
+
+
 @compiled
 def solve(A, b):
     """x with A x = b for the compiled loops' small systems (Gaussian elimination,

@@ -14,7 +14,7 @@ import cv2
 import numpy as np
 
 from pipeline.camera import Camera
-from pipeline.jit import compiled
+from pipeline.jit import compiled, plain
 
 
 def project_plane(
@@ -23,10 +23,7 @@ def project_plane(
     """Pad points (N x 2 metres, z = 0) in the image (N x 2 pixels) and their
     derivatives by the pose's rotation vector and translation (N x 2 x 6), as
     ``cv2.projectPoints`` gives them."""
-    # (contiguous writable arrays: one compiled signature, the one the warm-up compiles)
-    pts = np.ascontiguousarray(pts_m, np.float64).reshape(-1, 2)
-    if not pts.flags.writeable:
-        pts = pts.copy()
+    pts = plain(pts_m).reshape(-1, 2)
     r = np.array(rvec, np.float64).reshape(3)
     t = np.array(tvec, np.float64).reshape(3)
     dist = camera.dist
@@ -86,7 +83,9 @@ def _project(pts, r, t, K, k):
     k1, k2, p1, p2, k3 = k[0], k[1], k[2], k[3], k[4]
     proj = np.empty((n, 2))
     jac = np.empty((n, 2, 6))
-    dX = np.empty((3, 6))
+    dX = np.zeros((3, 6))
+    for i in range(3):
+        dX[i, 3 + i] = 1.0
     for q in range(n):
         px, py = pts[q, 0], pts[q, 1]
         X = R[0, 0] * px + R[0, 1] * py + t[0]
@@ -103,20 +102,16 @@ def _project(pts, r, t, K, k):
         # d(xd, yd) / d(x, y)
         dradial = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2)  # d radial / d r2
         a11 = radial + 2.0 * x * x * dradial + 2.0 * p1 * y + 6.0 * p2 * x
-        a12 = 2.0 * x * y * dradial + 2.0 * p1 * x + 2.0 * p2 * y
-        a21 = 2.0 * x * y * dradial + 2.0 * p1 * x + 2.0 * p2 * y
+        a12 = 2.0 * x * y * dradial + 2.0 * p1 * x + 2.0 * p2 * y  # (= d yd / d x)
         a22 = radial + 2.0 * y * y * dradial + 6.0 * p1 * y + 2.0 * p2 * x
-        # d(X, Y, Z) / d(r, t)
+        # d(X, Y, Z) / d(r); by t it is the identity (set once, above the loop)
         for i in range(3):
             dX[0, i] = dR[0, 0, i] * px + dR[0, 1, i] * py
             dX[1, i] = dR[1, 0, i] * px + dR[1, 1, i] * py
             dX[2, i] = dR[2, 0, i] * px + dR[2, 1, i] * py
-        for i in range(3):
-            for j in range(3):
-                dX[i, 3 + j] = 1.0 if i == j else 0.0
         for m in range(6):
             dx = (dX[0, m] - x * dX[2, m]) * iz
             dy = (dX[1, m] - y * dX[2, m]) * iz
             jac[q, 0, m] = fx * (a11 * dx + a12 * dy)
-            jac[q, 1, m] = fy * (a21 * dx + a22 * dy)
+            jac[q, 1, m] = fy * (a12 * dx + a22 * dy)
     return proj, jac

@@ -18,7 +18,7 @@ from collections.abc import Callable
 import numpy as np
 
 from pipeline.homography_fit import apply_h
-from pipeline.jit import compiled
+from pipeline.jit import compiled, plain
 
 STEP_PX = 1.0  # along each stroke's middle
 MAX_DIP = 0.35  # of the H's contrast: a deeper dip along a stroke's middle is a gap
@@ -85,7 +85,7 @@ def stroke_samples(
 def _sample(image: np.ndarray, pts: np.ndarray, weights: np.ndarray) -> np.ndarray:
     """``weights . pixel`` at each point (N x 2), bilinear, the image's border
     replicated; nan at points that are not finite."""
-    p = np.ascontiguousarray(pts, np.float64).reshape(-1, 2)
+    p = plain(pts).reshape(-1, 2)
     x0 = y0 = 0
     if not (image.flags.c_contiguous and image.flags.writeable):
         # A window's pixels (or a read-only picture's, which would need a compiled
@@ -97,7 +97,7 @@ def _sample(image: np.ndarray, pts: np.ndarray, weights: np.ndarray) -> np.ndarr
         if len(seen):
             x0, y0 = np.clip(np.floor(seen.min(axis=0)) - 1, 0, [w - 1, h - 1]).astype(int)
             x1, y1 = np.clip(np.ceil(seen.max(axis=0)) + 2, [x0 + 1, y0 + 1], [w, h]).astype(int)
-        image = np.ascontiguousarray(image[y0:y1, x0:x1])
+        image = plain(image[y0:y1, x0:x1], image.dtype)
         p = p - [x0, y0]
     weights = np.asarray(weights, np.float64).reshape(-1)
     if image.ndim == 2:  # (a gray picture: every channel alike)

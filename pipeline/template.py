@@ -28,7 +28,7 @@ import cv2
 import numpy as np
 
 from pipeline.homography_fit import apply_h
-from pipeline.jit import column_medians
+from pipeline.jit import column_medians, plain
 
 MARGIN = 0.15  # pattern: the H's bounding box grown by this much of its size
 BOARD_REACH = 0.4  # board: out to this much of the H's size around its bounding box
@@ -224,7 +224,7 @@ def _percentiles(values: np.ndarray, q: tuple[float, ...]) -> np.ndarray:
 
 def _column_medians(rows: np.ndarray) -> np.ndarray:
     """``np.median(rows, axis=0)`` (compiled: numpy's costs 50 us a call)."""
-    return column_medians(np.ascontiguousarray(rows, np.float32))
+    return column_medians(plain(rows, np.float32))
 
 
 def _crop(image: np.ndarray, x0: int, y0: int, x1: int, y1: int, dsize) -> np.ndarray:
