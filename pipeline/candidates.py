@@ -134,7 +134,7 @@ def locate(cand: Candidate, binary: Binarized, reference: Reference) -> Located 
             if H0 is None:
                 continue
             search = 2.5
-        fitted = fit_h_sides(binary.levels, reference, H0, search_px=search)
+        fitted = fit_h_sides(binary.smooth, reference, H0, search_px=search)
         if fitted is None:
             continue
         fit, unlike = fitted

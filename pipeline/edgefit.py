@@ -23,6 +23,7 @@ import numpy as np
 
 from pipeline import edge_kernels as kernels
 from pipeline.camera import Camera
+from pipeline.jit import pixels
 from pipeline.planar_projection import project_plane
 
 MIN_SIDE_PX = 7.0  # sides shorter than this in the image are not sampled
@@ -156,7 +157,7 @@ def fit_edges(
     camera : intrinsics of ``image``.
     rvec, tvec : starting pose (OpenCV pad -> camera).
     """
-    img = np.ascontiguousarray(image, np.float32)
+    img = pixels(image)
     rvec = np.asarray(rvec, np.float64).reshape(3, 1).copy()
     tvec = np.asarray(tvec, np.float64).reshape(3, 1).copy()
     result = None  # (rvec, tvec, rms, inliers, sides) of the last good step
@@ -189,7 +190,7 @@ def edge_support(image: np.ndarray, model: EdgeModel, camera: Camera, rvec, tvec
     pa, pb, usable = _sides_in_view(model, camera, rvec, tvec, 0.0)
     proj, _ = project_plane(model.samples[0], rvec, tvec, camera)
     return kernels.pose_support(
-        np.ascontiguousarray(image, np.float32), pa, pb, model.bright, model.polygon,
+        pixels(image), pa, pb, model.bright, model.polygon,
         model.curved, usable, model.samples[1], proj, MIN_SIDE_PX, kernels.MIN_DROP,
     )  # fmt: skip
 

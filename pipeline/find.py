@@ -263,7 +263,7 @@ def _check(
         # Strokes of 2 px or a motion blur leave an H's own evidence short of
         # MIN_EVIDENCE; it still counts when the rest of its pad is found around it
         # (which a look-alike mark on the floor has not).
-        if whole_pad(hit.fit.H, reference, binary.levels, any_size=True) is hit.fit.H:
+        if whole_pad(hit.fit.H, reference, binary.smooth, any_size=True) is hit.fit.H:
             return "unclear"
     elif span < _framed_below_px(reference) and not _small_pad_around(hit, binary, reference):
         # A few pixels of H-shaped texture are everywhere: so small, the H is the
@@ -320,7 +320,7 @@ def _plain_light_board(reference: Reference) -> bool:
 def _small_pad_around(hit: Located, binary: Binarized, reference: Reference) -> bool:
     """Whether the rest of the pad is found around a small H: its marks' edges, or
     (the marks a pixel or two wide, their edges merged) the whole pad's pattern."""
-    if whole_pad(hit.fit.H, reference, binary.levels, any_size=True) is not hit.fit.H:
+    if whole_pad(hit.fit.H, reference, binary.smooth, any_size=True) is not hit.fit.H:
         return True
     if reference.marks_model is None or _plain_light_board(reference):
         return False

@@ -191,7 +191,7 @@ def process_frame(
                 cam,
                 to_frame @ hit.fit.H,
                 gravity=gravity,
-                found=(view, binary.levels),
+                found=(view, binary.smooth),
             )
             stages.lap("pose")
             if measured is None:  # no pose of the pad lying level fits it (from this start)
@@ -205,7 +205,7 @@ def process_frame(
     if far_found is not None:
         far_binary, shapes = far_found
         to_frame = np.linalg.inv(far.matrix)
-        for H in find_boards(far_binary.levels, shapes, reference, max(1.0, far.scale)):
+        for H in find_boards(far_binary.smooth, shapes, reference, max(1.0, far.scale)):
             if verifier is not None:
                 # The verifier judges the H the board puts where it is, as any H.
                 h_px = apply_h(H, reference.corners_m)
@@ -213,7 +213,7 @@ def process_frame(
                     tally.rejected += 1
                     continue
             measured = measure(
-                image, reference, cam, to_frame @ H, gravity=gravity, found=(far, far_binary.levels)
+                image, reference, cam, to_frame @ H, gravity=gravity, found=(far, far_binary.smooth)
             )
             stages.lap("board")
             if measured is not None and measured.support >= MIN_BOARD_SUPPORT:
@@ -316,7 +316,7 @@ def _follow(
         coarse = _window(image, H, reference, FOLLOW_COARSE_SPAN_PX / span)
         if coarse is None:
             return None
-        levels = smooth_channel(coarse.image(image), reference.projection).astype(np.float32)
+        levels = smooth_channel(coarse.image(image), reference.projection)
         H = _fit_near(levels, coarse, reference, H)
         if H is None:
             return None
@@ -343,7 +343,7 @@ def _follow_fine(
         return None
     projection = reference.projection
     channel = to_channel(view.image(image), projection)
-    levels = smooth(channel).astype(np.float32)
+    levels = smooth(channel)
     H = _fit_near(levels, view, reference, H)
     if H is None:
         return None

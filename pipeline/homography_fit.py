@@ -18,7 +18,7 @@ import numpy as np
 
 from pipeline.edge_kernels import MIN_DROP, homography_steps, side_support
 from pipeline.edgefit import EdgeModel, normalising
-from pipeline.jit import compiled_ieee, plain
+from pipeline.jit import compiled_ieee, pixels, plain
 
 MIN_SIDE_PX = 1.0  # a stroke end of a small H may be 2 px: still measured
 DAMPING = 1e-3
@@ -75,11 +75,15 @@ def _apply_h(H, p):
     # (a frame calls this a few hundred times on a few points: numpy's overhead, compiled out)
     out = np.empty((p.shape[0], 2))
     for i in range(p.shape[0]):
-        x, y = p[i, 0], p[i, 1]
-        w = H[2, 0] * x + H[2, 1] * y + H[2, 2]
-        out[i, 0] = (H[0, 0] * x + H[0, 1] * y + H[0, 2]) / w
-        out[i, 1] = (H[1, 0] * x + H[1, 1] * y + H[1, 2]) / w
+        out[i, 0], out[i, 1] = apply_point(H, p[i, 0], p[i, 1])
     return out
+
+
+@compiled_ieee
+def apply_point(H, x, y):
+    """One point (x, y) through a homography, for compiled loops (see `apply_h`)."""
+    w = H[2, 0] * x + H[2, 1] * y + H[2, 2]
+    return (H[0, 0] * x + H[0, 1] * y + H[0, 2]) / w, (H[1, 0] * x + H[1, 1] * y + H[1, 2]) / w
 
 
 def affine_part(H: np.ndarray, centre_m: np.ndarray) -> np.ndarray:
@@ -108,7 +112,7 @@ def fit_homography(
 
     Parameters
     ----------
-    image : float32 smoothed channel in which the model's bright polygons are bright.
+    image : smoothed channel (uint8, or float) in which the model's bright polygons are bright.
     model : the sides to fit (pad metres).
     H0 : starting homography, pad metres -> pixels (an affine guess will do).
     iterations : Gauss-Newton steps at most.
@@ -141,7 +145,7 @@ def fit_homography(
     >>> bool(np.abs(apply_h(fit.H, h) - apply_h(true, h)).max() < 0.25), fit.support > 0.9
     (True, True)
     """
-    img = np.ascontiguousarray(image, np.float32)
+    img = pixels(image)
     H = np.asarray(H0, np.float64) / H0[2, 2]
     # Condition the unknowns: pad metres and pixels both scaled to ~unit size.
     ends, Tm, Tm_inv = model.ends_normalised
@@ -200,7 +204,7 @@ def support(
             return 0.0
     pts_m, side = model.samples
     found = side_support(
-        np.ascontiguousarray(image, np.float32),
+        pixels(image),
         model.a_m,
         model.b_m,
         model.bright,

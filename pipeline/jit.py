@@ -26,6 +26,14 @@ def plain(a, dtype=np.float64) -> np.ndarray:
     return out if out.flags.writeable else out.copy()
 
 
+def pixels(image) -> np.ndarray:
+    """An image the compiled edge loops sample: a uint8 one as it is (the smoothed
+    channel; float32 would take four times the memory, and a frame's float copy was
+    a full pass over memory that is no longer in cache when the next frame comes),
+    any other as float32; contiguous and writable (see `plain`)."""
+    return plain(image, np.uint8 if image.dtype == np.uint8 else np.float32)
+
+
 @compiled
 def solve(A, b):
     """x with A x = b for the compiled loops' small systems (Gaussian elimination,

@@ -101,7 +101,7 @@ def measure(
 ) -> Measured | None:
     """Measure the pad located by ``H`` (pad metres -> pixels of ``frame``, whose
     camera is ``camera``). ``found``: the view the H was found in and its smoothed
-    channel (float32), used again when it is already as fine as a measurement needs."""
+    channel, used again when it is already as fine as a measurement needs."""
     outline = pad_box_m(reference)
     px = apply_h(H, outline)
     span = float(np.ptp(px, axis=0).max())
@@ -113,7 +113,7 @@ def measure(
         view, levels = found
         Hv = view.matrix @ H
     else:
-        levels = smooth_channel(view.image(frame), reference.projection).astype(np.float32)
+        levels = smooth_channel(view.image(frame), reference.projection)
         Hv = view.matrix @ H
         refit = fit_homography(levels, reference.h_edges, Hv, search_px=2.5)
         if refit is not None:

@@ -38,7 +38,6 @@ axis for a white H on an orange disc). Five thresholding methods, all selectable
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
 
 import cv2
 import numpy as np
@@ -135,11 +134,6 @@ class Binarized:
     mask: np.ndarray
     threshold: float
 
-    @cached_property
-    def levels(self) -> np.ndarray:
-        """``smooth`` as float32, what the edge fits sample (converted once a view)."""
-        return self.smooth.astype(np.float32)
-
 
 def seed_enhance(gray: np.ndarray) -> np.ndarray:
     """The seed's Laplacian + average enhancement (MATLAB fspecial defaults), float32."""
@@ -208,8 +202,10 @@ def above_local_mean(channel: np.ndarray, block: int, by: int) -> np.ndarray:
     mean = cv2.boxFilter(
         channel, -1, (block, block), borderType=cv2.BORDER_REPLICATE | cv2.BORDER_ISOLATED
     )
-    # (mean + by saturates at 255, where no pixel can be above it: as OpenCV's)
-    return cv2.compare(channel, cv2.add(mean, by), cv2.CMP_GT)
+    # (mean + by saturates at 255, where no pixel can be above it: as OpenCV's; in
+    # place: a fresh frame-sized array is memory to fetch, the mean's is in cache)
+    cv2.add(mean, by, dst=mean)
+    return cv2.compare(channel, mean, cv2.CMP_GT, dst=mean)
 
 
 def binarize(

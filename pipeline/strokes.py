@@ -17,25 +17,14 @@ from collections.abc import Callable
 
 import numpy as np
 
-from pipeline.homography_fit import apply_h
-from pipeline.jit import compiled, plain
+from pipeline.homography_fit import apply_point
+from pipeline.jit import compiled, compiled_ieee, plain
 
 STEP_PX = 1.0  # along each stroke's middle
 MAX_DIP = 0.35  # of the H's contrast: a deeper dip along a stroke's middle is a gap
 NOISE_DIP = 1.5  # ... and deeper by this many of the middles' noise (standard deviations)
 MAX_NOISE = 0.25  # of the contrast: noisier middles are texture, not paint (no more allowance)
 _ACROSS = np.linspace(-1.5, 1.5, 7)  # offsets across a stroke, in half stroke widths
-
-
-def _strokes_m(corners_m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The starts (3 x 2), ends (3 x 2) and half widths (3) of the left leg's, right
-    leg's and crossbar's middles, in the 12-corner order (corners 0, 1, 10, 11 are
-    the left leg's, 4-7 the right's, 2, 3, 8, 9 the crossbar's inner corners): each
-    middle runs from the mid-point of side (a, b) to that of side (d, e)."""
-    c = np.asarray(corners_m, np.float64)
-    a, b, d, e = (np.array(i) for i in ((0, 4, 2), (1, 5, 9), (11, 7, 3), (10, 6, 8)))
-    half = 0.25 * (np.hypot(*(c[b] - c[a]).T) + np.hypot(*(c[e] - c[d]).T))
-    return 0.5 * (c[a] + c[b]), 0.5 * (c[d] + c[e]), half
 
 
 def stroke_samples(
@@ -50,36 +39,71 @@ def stroke_samples(
     points are board (not on the H or another painted mark); ``counts``: middle
     points per stroke.
     """
-    a, b, half = _strokes_m(corners_m)
-    ends = apply_h(H, np.vstack([a, b]))
-    length_m = np.maximum(np.hypot(*(b - a).T), 1e-12)
-    length_px = np.hypot(*(ends[3:] - ends[:3]).T)
-    counts = np.maximum(3, (length_px / STEP_PX).astype(np.int64))
-    d = (b - a) / length_m[:, None]
-    normal = np.column_stack([-d[:, 1], d[:, 0]])
-    px_per_m = length_px / length_m
-    reach = half + np.maximum(1.5, half * px_per_m) / px_per_m
-    inset = np.minimum(half / length_m, 0.25)  # a stroke's blurred end is left out
-    # Every stroke's middle points at once: point j of stroke i at t_j along it.
-    i = np.repeat(np.arange(3), counts)
-    u = np.arange(len(i)) - np.repeat(np.cumsum(counts) - counts, counts)
-    t = inset[i] + (1 - 2 * inset[i]) * (u / (counts[i] - 1))
-    mids = a[i] + t[:, None] * (b - a)[i]
-    # A reference drawn with thinner or bolder strokes than the pad in view
-    # puts its middles off the pad's: points across a stroke and a half.
-    paint_m = mids[None] + (_ACROSS[:, None, None] * half[i][:, None]) * normal[i]
-    sa = mids + reach[i][:, None] * normal[i]
-    sb = mids - reach[i][:, None] * normal[i]
-    k, m = paint_m.shape[:2]
-    px = apply_h(H, np.vstack([paint_m.reshape(-1, 2), sa, sb]))
-    return (
-        px[: k * m].reshape(k, m, 2),
-        px[k * m : k * m + m],
-        px[k * m + m :],
-        ~is_paint(sa),
-        ~is_paint(sb),
-        tuple(int(n) for n in counts),
-    )
+    paint, side_a, side_b, sides_m, counts = _stroke_points(plain(corners_m), plain(H), _ACROSS)
+    board = ~is_paint(sides_m)
+    m = len(side_a)
+    return paint, side_a, side_b, board[:m], board[m:], tuple(int(n) for n in counts)
+
+
+@compiled_ieee  # (an H that sends a point to infinity: inf or nan, as numpy's)
+def _stroke_points(c, H, across):
+    """`stroke_samples`' points: across (K x m x 2) and beside (m x 2, each side) the
+    strokes' middles in pixels, the sides' points in pad metres (2m x 2, side a's
+    first) and the middle points per stroke.
+
+    The left leg's, right leg's and crossbar's middles, in the 12-corner order
+    (corners 0, 1, 10, 11 are the left leg's, 4-7 the right's, 2, 3, 8, 9 the
+    crossbar's inner corners): each runs from the mid-point of side (a, b) to that
+    of side (d, e), its half width the mean of those sides' halves."""
+    ia, ib, id_, ie = (0, 4, 2), (1, 5, 9), (11, 7, 3), (10, 6, 8)
+    start = np.empty((3, 2))
+    end = np.empty((3, 2))
+    half = np.empty(3)
+    counts = np.empty(3, np.int64)
+    for s in range(3):
+        a, b, d, e = c[ia[s]], c[ib[s]], c[id_[s]], c[ie[s]]
+        across_ab = math.hypot(b[0] - a[0], b[1] - a[1])
+        half[s] = 0.25 * (across_ab + math.hypot(e[0] - d[0], e[1] - d[1]))
+        for k in range(2):
+            start[s, k] = 0.5 * (a[k] + b[k])
+            end[s, k] = 0.5 * (d[k] + e[k])
+    length_m = np.empty(3)
+    px_per_m = np.empty(3)
+    for s in range(3):
+        x0, y0 = apply_point(H, start[s, 0], start[s, 1])
+        x1, y1 = apply_point(H, end[s, 0], end[s, 1])
+        length_px = math.hypot(x1 - x0, y1 - y0)
+        length_m[s] = max(math.hypot(end[s, 0] - start[s, 0], end[s, 1] - start[s, 1]), 1e-12)
+        counts[s] = max(3, int(length_px / STEP_PX))
+        px_per_m[s] = length_px / length_m[s]
+    m = counts.sum()
+    paint = np.empty((len(across), m, 2))
+    side_a = np.empty((m, 2))
+    side_b = np.empty((m, 2))
+    sides_m = np.empty((2 * m, 2))
+    q = 0
+    for s in range(3):
+        dx = (end[s, 0] - start[s, 0]) / length_m[s]
+        dy = (end[s, 1] - start[s, 1]) / length_m[s]
+        nx, ny = -dy, dx
+        # beside the stroke: a stroke-half (at least 1.5 px) past its edge
+        reach = half[s] + max(1.5, half[s] * px_per_m[s]) / px_per_m[s]
+        inset = min(half[s] / length_m[s], 0.25)  # a stroke's blurred end is left out
+        for u in range(counts[s]):
+            t = inset + (1 - 2 * inset) * (u / (counts[s] - 1))
+            mx = start[s, 0] + t * (end[s, 0] - start[s, 0])
+            my = start[s, 1] + t * (end[s, 1] - start[s, 1])
+            # A reference drawn with thinner or bolder strokes than the pad in view
+            # puts its middles off the pad's: points across a stroke and a half.
+            for k in range(len(across)):
+                off = across[k] * half[s]
+                paint[k, q, 0], paint[k, q, 1] = apply_point(H, mx + off * nx, my + off * ny)
+            sides_m[q, 0], sides_m[q, 1] = mx + reach * nx, my + reach * ny
+            sides_m[m + q, 0], sides_m[m + q, 1] = mx - reach * nx, my - reach * ny
+            side_a[q, 0], side_a[q, 1] = apply_point(H, sides_m[q, 0], sides_m[q, 1])
+            side_b[q, 0], side_b[q, 1] = apply_point(H, sides_m[m + q, 0], sides_m[m + q, 1])
+            q += 1
+    return paint, side_a, side_b, sides_m, counts
 
 
 def _sample(image: np.ndarray, pts: np.ndarray, weights: np.ndarray) -> np.ndarray:

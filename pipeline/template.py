@@ -28,7 +28,8 @@ import cv2
 import numpy as np
 
 from pipeline.homography_fit import apply_h
-from pipeline.jit import column_medians, plain
+from pipeline.jit import plain
+from pipeline.template_kernels import board_and_paint, board_levels, masked_ncc
 
 MARGIN = 0.15  # pattern: the H's bounding box grown by this much of its size
 BOARD_REACH = 0.4  # board: out to this much of the H's size around its bounding box
@@ -109,9 +110,8 @@ def compare(
     around = _polygon_mask(f * (outer_px - [x0, y0]), dsize) & seen
     if np.count_nonzero(near) < MIN_SIDE_PX * MIN_SIDE_PX:
         return NOTHING
-    ch_ref = warped[..., 3]
     ch_frame = _crop(frame_channel, x0, y0, x1, y1, dsize)
-    ncc = _ncc(ch_frame[near], ch_ref[near])
+    ncc = masked_ncc(ch_frame, plain(warped[..., 3], np.float32), near)
     # The reference's own levels say which pixels are H and which are board
     # (the quarter nearest each end, leaving out the blurred edges between).
     if not around.any():  # a degenerate outline (a fuzzed or odd reference)
@@ -119,26 +119,26 @@ def compare(
     # Taken on the reference blurred as a camera's frame is, so that on a small view
     # they are the pixels that blur leaves pure (a board a few pixels wide between
     # the H and the pad's bars takes the paint's light a pixel out).
-    pick = _blurred(warped[..., 3], seen, PICK_BLUR_PX * f)
-    low, high = _percentiles(pick[around], (5.0, 95.0))
-    spread = high - low
-    board = around & (pick <= low + 0.25 * spread)
-    paint = near & (pick >= high - 0.25 * spread)
+    pick = plain(_blurred(warped[..., 3], seen, PICK_BLUR_PX * f), np.float32)
+    board, paint, off_paint = board_and_paint(pick, around, near, 5.0, 95.0, 0.25)
     if np.count_nonzero(board) < 8 or np.count_nonzero(paint) < 4:
         return Comparison(ncc, math.nan, math.nan, math.nan)
-    # The frame's colours beside the reference's: one median per pixel set (the
-    # board's brightness, pixel by pixel).
+    # The frame's colours beside the reference's (the board's brightness, pixel by
+    # pixel against the paint nearest it).
     frame_crop = _crop(frame_bgr, x0, y0, x1, y1, dsize)
-    frame_px, ref_px = frame_crop.reshape(-1, 3), warped.reshape(-1, 4)
-    on_board = np.flatnonzero(board)
-    some = on_board[:: _stride(len(on_board))]
-    b_f, b_r = np.split(_column_medians(np.hstack([frame_px[some], ref_px[some, :3]])), 2)
-    p_f = _column_medians(frame_px[np.flatnonzero(paint)])
-    # The frame's luma and the reference's, side by side.
     lumas = cv2.merge([cv2.transform(frame_crop, _LUMA_ROW), cv2.transform(warped, _LUMA_ROW4)])
     lumas = _blurred(lumas, seen, PAIR_BLUR_PX)
-    level, reference_level = _paired_relative(
-        lumas.reshape(-1, 2), on_board, _nearest_paint(board, paint)
+    _, labels = cv2.distanceTransformWithLabels(
+        off_paint, cv2.DIST_L2, 3, labelType=cv2.DIST_LABEL_PIXEL
+    )
+    b_f, b_r, p_f, level, reference_level = board_levels(
+        frame_crop.reshape(-1, 3),
+        warped.reshape(-1, 4),
+        plain(lumas, np.float32).reshape(-1, 2),
+        board.ravel(),
+        paint.ravel(),
+        labels.ravel(),
+        MAX_HUE_PIXELS,
     )
     return Comparison(ncc, level, reference_level, _hue(b_f, b_r), float(p_f @ _LUMA))
 
@@ -170,7 +170,7 @@ def pad_pattern(
         return math.nan
     ch_ref = _blurred(warped[..., 3], seen, FRAME_BLUR_PX)
     ch_frame = frame_channel[y0:y1, x0:x1].astype(np.float32)
-    return _ncc(ch_frame[inside], ch_ref[inside])
+    return masked_ncc(ch_frame, plain(ch_ref, np.float32), inside)
 
 
 def _warp(
@@ -212,21 +212,6 @@ def _blurred(channel: np.ndarray, seen: np.ndarray, sigma: float) -> np.ndarray:
     return cv2.GaussianBlur(channel * w, (0, 0), sigma) / den
 
 
-def _percentiles(values: np.ndarray, q: tuple[float, ...]) -> np.ndarray:
-    """``np.percentile(values, q)`` (linear), from one partial sort."""
-    n = len(values)
-    pos = np.asarray(q) / 100.0 * (n - 1)
-    lo = np.floor(pos).astype(np.intp)
-    hi = np.minimum(lo + 1, n - 1)
-    part = np.partition(values, np.union1d(lo, hi))
-    return part[lo] + (part[hi] - part[lo]) * (pos - lo)
-
-
-def _column_medians(rows: np.ndarray) -> np.ndarray:
-    """``np.median(rows, axis=0)`` (compiled: numpy's costs 50 us a call)."""
-    return column_medians(plain(rows, np.float32))
-
-
 def _crop(image: np.ndarray, x0: int, y0: int, x1: int, y1: int, dsize) -> np.ndarray:
     crop = image[y0:y1, x0:x1].astype(np.float32)
     if crop.shape[1] != dsize[0] or crop.shape[0] != dsize[1]:
@@ -250,39 +235,6 @@ def _polygon_mask(poly: np.ndarray, dsize: tuple[int, int]) -> np.ndarray:
     m = np.zeros((dsize[1], dsize[0]), np.uint8)
     cv2.fillConvexPoly(m, np.round(poly * 16).astype(np.int32), 1, shift=4)
     return m > 0
-
-
-def _ncc(a: np.ndarray, b: np.ndarray) -> float:
-    a = a - a.mean()
-    b = b - b.mean()
-    den = math.sqrt(float(np.dot(a, a)) * float(np.dot(b, b)))
-    return float(np.dot(a, b) / den) if den > 1e-9 else math.nan
-
-
-def _nearest_paint(board: np.ndarray, paint: np.ndarray) -> np.ndarray:
-    """For each board pixel (raster order), the flat index of the paint pixel nearest it."""
-    _, labels = cv2.distanceTransformWithLabels(
-        (~paint).astype(np.uint8), cv2.DIST_L2, 3, labelType=cv2.DIST_LABEL_PIXEL
-    )
-    return np.flatnonzero(paint)[labels[board] - 1]
-
-
-def _paired_relative(
-    lumas: np.ndarray, board: np.ndarray, nearest: np.ndarray
-) -> tuple[float, float]:
-    """The board's luma over the brighter of it and the paint nearest it, median over
-    the board, in the frame and on the reference (``lumas``: pixels x 2; ``board``
-    and ``nearest``: pixel indices): a shadow across the pad darkens a board pixel
-    and its paint alike."""
-    b, p = lumas[board], lumas[nearest]
-    ratios = b / np.maximum(np.maximum(b, p), 1.0)
-    frame, picture = _column_medians(ratios)
-    return float(frame), float(picture)
-
-
-def _stride(count: int) -> int:
-    """A step through ``count`` pixels that reads at most MAX_HUE_PIXELS of them."""
-    return max(1, -(-count // MAX_HUE_PIXELS))
 
 
 def _hue(frame_bgr: np.ndarray, ref_bgr: np.ndarray) -> float:

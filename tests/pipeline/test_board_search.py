@@ -49,7 +49,7 @@ def _boards(frame: np.ndarray, reference: Reference) -> tuple[View, list[np.ndar
     view = View.enlarged(frame.shape, 1280)
     binary = binarize_channel(to_channel(view.image(frame), reference.projection), "adaptive")
     shapes = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=binary.mask.size / 2)
-    return view, find_boards(binary.levels, shapes, reference, view.scale)
+    return view, find_boards(binary.smooth, shapes, reference, view.scale)
 
 
 @pytest.mark.parametrize("j", [3, 20, 23])

@@ -53,6 +53,24 @@ def test_edge_offsets_match_the_numpy_statement(search):
     assert ok.sum() > 50
 
 
+@pytest.mark.parametrize("search", [1.5, 6.0])
+def test_a_uint8_image_reads_as_its_float_copy(search):
+    # (the frames' smoothed channel is sampled as it is, uint8; points near and past
+    # the border take the clamped reads, the rest the unclamped ones)
+    rng = np.random.default_rng(4)
+    img = cv2.GaussianBlur(rng.uniform(0, 255, (60, 80)).astype(np.uint8), (5, 5), 1.0)
+    proj = rng.uniform(-5, 85, (400, 2))
+    angle = rng.uniform(0, 2 * np.pi, 400)
+    normal = np.column_stack([np.cos(angle), np.sin(angle)])
+    got = edge_offsets(img, proj, normal, search, MIN_DROP)
+    want = edge_offsets(img.astype(np.float32), proj, normal, search, MIN_DROP)
+    np.testing.assert_array_equal(got[0], want[0])
+    np.testing.assert_array_equal(got[1], want[1])
+    want_delta, want_ok = _numpy_offsets(img, proj, normal, search)
+    np.testing.assert_array_equal(got[1], want_ok)
+    np.testing.assert_allclose(got[0][want_ok], want_delta[want_ok], atol=1e-9)
+
+
 def test_an_edge_is_found_where_it_is_and_only_with_the_right_polarity():
     img = np.zeros((40, 40), np.float32)
     img[:, :20] = 200.0  # bright left half: the edge lies at x = 19.5
