@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numba
 import numpy as np
+from numba import types
+from numba.extending import intrinsic
 
 compiled = numba.njit(cache=True, nogil=True)
 # ... and where a division by zero must give inf or nan, as numpy's does, not raise
@@ -32,6 +34,18 @@ def pixels(image) -> np.ndarray:
     a full pass over memory that is no longer in cache when the next frame comes),
     any other as float32; contiguous and writable (see `plain`)."""
     return plain(image, np.uint8 if image.dtype == np.uint8 else np.float32)
+
+
+@intrinsic
+def popcount(typingctx, word):
+    """The number of bits set in a uint64 (one CPU instruction), for compiled loops."""
+    if word != types.uint64:
+        return None
+
+    def codegen(context, builder, signature, args):
+        return builder.ctpop(args[0])
+
+    return types.int64(types.uint64), codegen
 
 
 @compiled

@@ -90,3 +90,21 @@ def _star(rng):
     a = np.sort(rng.uniform(0, 2 * np.pi, 40))
     r = rng.uniform(10, 30, 40)
     return np.column_stack([50 + r * np.cos(a), 50 + r * np.sin(a)])
+
+
+def test_the_bit_overlaps_are_the_float_products():
+    # (the overlaps were a float32 matrix product of the cells: the same numbers)
+    from pipeline.shape_match import _bits, _overlaps
+
+    rng = np.random.default_rng(5)
+    turns = (rng.random((120, 1600)) < 0.3).astype(np.uint8)
+    regions = (rng.random((17, 1600)) < rng.uniform(0, 0.6, (17, 1))).astype(np.uint8)
+    regions[3] = 0  # an empty region against an empty turn: no union
+    turns[7] = 0
+    areas = turns.sum(axis=1, dtype=np.int64)
+    got = _overlaps(_bits(turns), areas, _bits(regions))
+    t, r = turns.astype(np.float32), regions.T.astype(np.float32)
+    inter = t @ r
+    want = inter / np.maximum(t.sum(axis=1)[:, None] + r.sum(axis=0)[None, :] - inter, 1e-9)
+    assert got.dtype == np.float32
+    np.testing.assert_array_equal(got, want)
