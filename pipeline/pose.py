@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import math
+
 import cv2
 import numpy as np
 
 from pipeline.camera import Camera
-from pipeline.jit import compiled, solve
+from pipeline.jit import compiled, plain, solve
 from pipeline.planar_projection import project_plane
 from pipeline.result import Pose, yaw_of
 
@@ -43,10 +45,10 @@ def ippe_candidates(
 
 def tilt_deg(rvec: np.ndarray) -> float:
     """Angle between the camera's optical axis and straight down onto the pad."""
-    R_cam_pad, _ = cv2.Rodrigues(rvec)
     # The pad's +z in camera coordinates is R_cam_pad[:, 2]; looking down, the
     # optical axis (camera +z) points along pad -z.
-    return float(np.degrees(np.arccos(np.clip(-R_cam_pad[2, 2], -1.0, 1.0))))
+    up = pad_normal_in_camera(rvec)
+    return float(np.degrees(np.arccos(np.clip(-up[2], -1.0, 1.0))))
 
 
 def to_pose(
@@ -78,7 +80,7 @@ def project(points_m: np.ndarray, rvec: np.ndarray, tvec: np.ndarray, camera: Ca
     """Pixels of pad points (N x 2 on the pad plane, or N x 3)."""
     pts = np.asarray(points_m, np.float64)
     if pts.shape[1] == 2:
-        pts = np.column_stack([pts, np.zeros(len(pts))])
+        return project_plane(pts, rvec, tvec, camera)[0]  # (compiled: a frame asks a few)
     proj, _ = cv2.projectPoints(pts, rvec, tvec, camera.K, camera.dist)
     return proj.reshape(-1, 2)
 
@@ -97,8 +99,27 @@ def _angle_diff(a: float, b: float) -> float:
 
 def pad_normal_in_camera(rvec: np.ndarray) -> np.ndarray:
     """The pad's up direction (its +z) in the camera frame, for OpenCV's pad->camera rvec."""
-    R_cam_pad, _ = cv2.Rodrigues(np.asarray(rvec, np.float64).reshape(3, 1))
-    return R_cam_pad[:, 2]
+    return _third_column(plain(rvec).reshape(3))
+
+
+@compiled
+def _third_column(r):
+    """cv2.Rodrigues(r)[0][:, 2], as OpenCV computes it (the same operations in the
+    same order: the same numbers; a frame asks for a dozen)."""
+    theta = math.sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2])
+    out = np.zeros(3)
+    if theta < 2.220446049250313e-16:  # (DBL_EPSILON: the identity)
+        out[2] = 1.0
+        return out
+    c, s = math.cos(theta), math.sin(theta)
+    c1 = 1.0 - c
+    inv = 1.0 / theta
+    x, y, z = r[0] * inv, r[1] * inv, r[2] * inv
+    # R = c I + c1 r r^T + s [r]x
+    out[0] = (c * 0.0 + c1 * (x * z)) + s * y
+    out[1] = (c * 0.0 + c1 * (y * z)) + s * -x
+    out[2] = (c * 1.0 + c1 * (z * z)) + s * 0.0
+    return out
 
 
 def tilt_from_level_deg(rvec: np.ndarray, gravity_cam: np.ndarray) -> float:
