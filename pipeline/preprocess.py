@@ -160,9 +160,10 @@ def to_channel(image_bgr: np.ndarray, projection: Projection = GRAY) -> np.ndarr
     """The frame on the reference's channel (uint8): its H bright, its board dark."""
     if image_bgr.ndim == 2:
         return projection.apply_gray(image_bgr)
-    if not has_colour(image_bgr):
-        return projection.apply_gray(image_bgr[..., 0].copy())
-    return projection.apply(image_bgr)
+    # (luma is the same whether or not the picture has colour: no need to look)
+    if projection.is_gray or has_colour(image_bgr):
+        return projection.apply(image_bgr)
+    return projection.apply_gray(image_bgr[..., 0].copy())
 
 
 def smooth_channel(image_bgr: np.ndarray, projection: Projection = GRAY) -> np.ndarray:

@@ -94,31 +94,73 @@ class ShapeMatcher:
             return out
         rastered = np.nonzero(np.all(np.isfinite(whiten), axis=(1, 2)))[0]
         iou = _overlaps(self.bits, self.areas, _bits(cells.reshape(len(cells), -1)))
-        best = np.argmax(iou, axis=0)
-        best_iou = iou[best, np.arange(len(rastered))]
-        order = np.argsort(-best_iou, kind="stable")
-        if top is not None:
-            order = order[:top]
-        order = order[best_iou[order] >= min_iou]
-        if not len(order):
-            return out
-        # All the matches' maps at once: frame = mean + W_c^-1 R(angle) W_r F (m - mean_r).
-        k = best[order]
-        n = len(self.angles)
-        a, b, c = iou[(k - 1) % n, order], iou[k, order], iou[(k + 1) % n, order]
-        angle = self.angles[k] + _peak_offsets(a, b, c) * (self.angles[1] - self.angles[0])
-        cos, sin = np.cos(angle), np.sin(angle)
-        turn = np.stack([np.stack([cos, -sin], -1), np.stack([sin, cos], -1)], 1)
-        w = whiten[rastered[order]]
-        det = w[:, 0, 0] * w[:, 1, 1] - w[:, 0, 1] * w[:, 1, 0]
-        adjugate = np.stack([np.stack([w[:, 1, 1], -w[:, 0, 1]], -1),
-                             np.stack([-w[:, 1, 0], w[:, 0, 0]], -1)], 1)  # fmt: skip
-        lin = (adjugate / det[:, None, None]) @ turn @ (self.whiten @ _FLIP)
-        t = centres[rastered[order]] - lin @ (self.mean_m @ _FLIP)
-        affine = np.concatenate([lin, t[:, :, None]], axis=2)
+        order, ious, affine = _best_maps(
+            iou,
+            self.angles,
+            whiten[rastered],
+            centres[rastered],
+            len(rastered) if top is None else top,
+            min_iou,
+            self.whiten @ _FLIP,
+            self.mean_m @ _FLIP,
+        )
         for q, j in enumerate(order):
-            out[int(index[rastered[j]])] = ShapeMatch(float(best_iou[j]), affine[q])
+            out[int(index[rastered[j]])] = ShapeMatch(float(ious[q]), affine[q])
         return out
+
+
+@compiled
+def _best_maps(iou, angles, whiten, centres, top, min_iou, ref_map, ref_mean):
+    """Of the regions (``iou``'s columns, S turns x K), the ``top`` best overlaps
+    (stably, best first) of at least ``min_iou``: their columns, overlaps and affine
+    maps from pad metres to frame pixels (m x 2 x 3), the turn refined between its
+    neighbours: frame = mean + W_c^-1 R(angle) ``ref_map`` (m - mean_r), ``ref_map``
+    the reference's whitening of pad metres, ``ref_mean`` its mean there. The float32
+    steps are rounded as numpy's float32 operations round them."""
+    n, k = iou.shape
+    best = np.empty(k, np.int64)
+    best_iou = np.empty(k, np.float32)
+    for j in range(k):
+        b = 0
+        for i in range(1, n):
+            if iou[i, j] > iou[b, j]:
+                b = i
+        best[j], best_iou[j] = b, iou[b, j]
+    order = np.argsort(-best_iou, kind="mergesort")[:top]
+    order = order[best_iou[order] >= min_iou]
+    step = angles[1] - angles[0]
+    affine = np.empty((len(order), 2, 3))
+    for q in range(len(order)):
+        j = order[q]
+        b = best[j]
+        lo, mid, hi = iou[(b - 1) % n, j], iou[b, j], iou[(b + 1) % n, j]
+        angle = angles[b] + float(_peak_offset(lo, mid, hi)) * step
+        cos, sin = np.cos(angle), np.sin(angle)
+        w = whiten[j]
+        det = w[0, 0] * w[1, 1] - w[0, 1] * w[1, 0]
+        inv = np.array([[w[1, 1] / det, -w[0, 1] / det], [-w[1, 0] / det, w[0, 0] / det]])
+        turned = np.empty((2, 2))
+        for r in range(2):
+            turned[r, 0] = inv[r, 0] * cos + inv[r, 1] * sin
+            turned[r, 1] = inv[r, 0] * -sin + inv[r, 1] * cos
+        for r in range(2):
+            for c in range(2):
+                affine[q, r, c] = turned[r, 0] * ref_map[0, c] + turned[r, 1] * ref_map[1, c]
+            affine[q, r, 2] = centres[j, r] - (
+                affine[q, r, 0] * ref_mean[0] + affine[q, r, 1] * ref_mean[1]
+            )
+    return order, best_iou[order], affine
+
+
+@compiled
+def _peak_offset(a, b, c):
+    """The sub-step offset of a maximum ``b`` between its neighbours ``a`` and ``c``
+    (float32: a parabola through the three)."""
+    den = np.float32(np.float32(a - np.float32(2.0 * b)) + c)
+    if not abs(den) > 1e-12:
+        return np.float32(0.0)
+    off = np.float32(np.float32(0.5 * np.float32(a - c)) / den)
+    return min(max(off, np.float32(-0.5)), np.float32(0.5))
 
 
 def _bits(cells: np.ndarray) -> np.ndarray:
@@ -264,11 +306,3 @@ def _raster(whitened: np.ndarray) -> np.ndarray:
     img = np.zeros((GRID, GRID), np.uint8)
     cv2.fillPoly(img, [pts], 1, lineType=cv2.LINE_8, shift=_SHIFT)
     return img
-
-
-def _peak_offsets(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """Sub-step offsets of maxima ``b`` between their neighbours ``a`` and ``c``
-    (a parabola through the three)."""
-    den = a - 2 * b + c
-    safe = np.where(np.abs(den) > 1e-12, den, 1.0)
-    return np.where(np.abs(den) > 1e-12, np.clip(0.5 * (a - c) / safe, -0.5, 0.5), 0.0)
