@@ -66,8 +66,7 @@ def board_and_paint(pick, around, near, low_q, high_q, share):
             if around[y, x]:
                 values[n] = pick[y, x]
                 n += 1
-    low = _percentile(values[:n], low_q)
-    high = _percentile(values[:n], high_q)
+    low, high = _percentiles(values[:n], low_q, high_q)
     spread = high - low
     top_of_board = low + share * spread
     foot_of_paint = high - share * spread
@@ -86,15 +85,19 @@ def board_and_paint(pick, around, near, low_q, high_q, share):
 
 
 @compiled
-def _percentile(values, q):
-    """``np.percentile(values, q)`` (linear) of float32 values (n >= 1), in float64."""
+def _percentiles(values, q_low, q_high):
+    """``np.percentile(values, (q_low, q_high))`` (linear) of float32 values (n >= 1),
+    in float64, from one partial sort."""
     n = len(values)
-    pos = q / 100.0 * (n - 1)
-    lo = math.floor(pos)
-    hi = min(lo + 1, n - 1)
-    part = np.partition(values, np.array([lo, hi]))
-    step = np.float32(float(part[hi]) - float(part[lo]))  # (numpy's float32 difference)
-    return float(part[lo]) + float(step) * (pos - lo)
+    pos = np.array([q_low, q_high]) / 100.0 * (n - 1)
+    lo = np.floor(pos).astype(np.int64)
+    hi = np.minimum(lo + 1, n - 1)
+    part = np.partition(values, np.array([lo[0], hi[0], lo[1], hi[1]]))
+    out = np.empty(2)
+    for k in range(2):
+        step = np.float32(float(part[hi[k]]) - float(part[lo[k]]))  # (numpy's float32 difference)
+        out[k] = float(part[lo[k]]) + float(step) * (pos[k] - lo[k])
+    return out[0], out[1]
 
 
 @compiled

@@ -76,3 +76,21 @@ def test_edge_fit_recovers_the_pose_from_a_disturbed_start(reference):
     # Where there is no pad, the pad's edges are not found.
     blank = binarize(np.full_like(frame, 120), "otsu").smooth
     assert edge_support(blank, reference.edge_model, CAM, fit.rvec, fit.tvec) < 0.1
+
+
+def test_the_pads_up_is_opencvs_rotations_third_column_to_the_bit():
+    import cv2
+
+    from pipeline.pose import pad_normal_in_camera, project
+
+    rng = np.random.default_rng(8)
+    cam = Camera.from_fov(640, 480, 60.0)
+    pts = rng.uniform(-0.3, 0.3, (12, 2))
+    for scale in (0.0, 1e-17, 1e-8, 0.1, 1.0, 3.0):
+        for _ in range(50):
+            r = rng.normal(0, scale, 3) if scale else np.zeros(3)
+            R, _ = cv2.Rodrigues(r.reshape(3, 1))
+            np.testing.assert_array_equal(pad_normal_in_camera(r), R[:, 2])
+            t = np.array([0.1, -0.2, 3.0])
+            want, _ = cv2.projectPoints(np.column_stack([pts, np.zeros(12)]), r, t, cam.K, cam.dist)
+            np.testing.assert_allclose(project(pts, r, t, cam), want.reshape(-1, 2), atol=1e-9)
