@@ -14,6 +14,7 @@ The projection's Jacobian comes from ``pipeline.planar_projection`` (OpenCV's mo
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
@@ -176,7 +177,8 @@ def fit_edges(
         if tvec[2, 0] <= 0:
             return None
         result = (rvec.copy(), tvec.copy(), rms, inliers, sides)
-        if np.linalg.norm(step[:3]) < 2e-5 and np.linalg.norm(step[3:]) < 2e-5 * float(tvec[2, 0]):
+        turn, move = math.sqrt(float(step[:3] @ step[:3])), math.sqrt(float(step[3:] @ step[3:]))
+        if turn < 2e-5 and move < 2e-5 * float(tvec[2, 0]):
             break
     return None if result is None else EdgeFit(*result)
 

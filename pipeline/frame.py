@@ -168,7 +168,7 @@ def process_frame(
     for way, view, how in _with_closer_looks(tries, tally, image.shape, reference):
         if view is None:
             continue
-        to_frame = np.linalg.inv(view.matrix)
+        to_frame = view.to_frame
         binary, shapes, hits = search(
             view.image(image),
             reference,
@@ -204,7 +204,7 @@ def process_frame(
     # finest view.
     if far_found is not None:
         far_binary, shapes = far_found
-        to_frame = np.linalg.inv(far.matrix)
+        to_frame = far.to_frame
         for H in find_boards(far_binary.smooth, shapes, reference, max(1.0, far.scale)):
             if verifier is not None:
                 # The verifier judges the H the board puts where it is, as any H.
@@ -392,7 +392,7 @@ def _fit_near(
     size_was = float(np.ptp(apply_h(start, reference.corners_m), axis=0).max())
     if not 1 / MAX_FOLLOW_GROWTH <= size / max(size_was, 1e-9) <= MAX_FOLLOW_GROWTH:
         return None
-    return np.linalg.inv(view.matrix) @ fit.H
+    return view.to_frame @ fit.H
 
 
 def _pad_span_px(H: np.ndarray, reference: Reference) -> float:
@@ -434,7 +434,7 @@ def _mask_for(mask: np.ndarray, view: View, search: View) -> np.ndarray:
     if view == search:
         return mask
     out = np.zeros(search.size[::-1], np.uint8)
-    to_search = search.matrix @ np.linalg.inv(view.matrix)
+    to_search = search.matrix @ view.to_frame
     return cv2.warpAffine(
         mask, to_search[:2], search.size, dst=out, flags=cv2.INTER_NEAREST,
         borderMode=cv2.BORDER_TRANSPARENT,
@@ -448,7 +448,7 @@ def _check_gravity(gravity_hint) -> np.ndarray | None:
         g = np.asarray(gravity_hint, np.float64).reshape(3)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"gravity_hint must be 3 numbers or None, got {gravity_hint!r}") from exc
-    norm = float(np.linalg.norm(g))
+    norm = math.sqrt(float(g.dot(g)))  # (np.linalg.norm's arithmetic, without its checks)
     if not np.all(np.isfinite(g)) or norm < 1e-9:
         raise ValueError(f"gravity_hint must be a finite, non-zero 3-vector, got {gravity_hint!r}")
     return g / norm

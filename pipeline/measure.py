@@ -9,6 +9,7 @@ needs), where its edges are sharpest.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 
 import cv2
@@ -149,7 +150,7 @@ def measure(
         )
         if fitted is not None and (min_support is None or fitted[1] >= min_support):
             fit, support, ambiguous = fitted
-            return Measured(np.linalg.inv(view.matrix) @ Hs, fit, support, ambiguous, told)
+            return Measured(view.to_frame @ Hs, fit, support, ambiguous, told)
     return None
 
 
@@ -402,7 +403,7 @@ def _tilt_shown(px: np.ndarray, cam: Camera, enlarged: float) -> float:
 
 def _rms(pts_m: np.ndarray, px: np.ndarray, cam: Camera, rvec, tvec) -> float:
     err = project(pts_m, rvec, tvec, cam) - px
-    return float(np.sqrt(np.mean(np.sum(err**2, axis=1))))
+    return math.sqrt(float(np.sum(err**2, axis=1).sum()) / len(err))
 
 
 def _tie(a, b) -> bool:

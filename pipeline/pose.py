@@ -48,7 +48,7 @@ def tilt_deg(rvec: np.ndarray) -> float:
     # The pad's +z in camera coordinates is R_cam_pad[:, 2]; looking down, the
     # optical axis (camera +z) points along pad -z.
     up = pad_normal_in_camera(rvec)
-    return float(np.degrees(np.arccos(np.clip(-up[2], -1.0, 1.0))))
+    return _degrees(math.acos(min(max(-float(up[2]), -1.0), 1.0)))
 
 
 def to_pose(
@@ -125,8 +125,13 @@ def _third_column(r):
 def tilt_from_level_deg(rvec: np.ndarray, gravity_cam: np.ndarray) -> float:
     """Angle between the pad's up and straight up (against gravity), degrees."""
     n = pad_normal_in_camera(rvec)
-    c = float(np.clip(-np.dot(n, gravity_cam), -1.0, 1.0))
-    return float(np.degrees(np.arccos(c)))
+    c = -float(np.dot(n, gravity_cam))
+    return _degrees(math.acos(min(max(c, -1.0), 1.0)))
+
+
+def _degrees(radians: float) -> float:
+    """``np.degrees`` of a float (its multiplication; numpy's call on one number costs more)."""
+    return radians * (180.0 / math.pi)
 
 
 def refine_with_gravity(
@@ -166,7 +171,7 @@ def refine_with_gravity(
     pts = np.asarray(points_m, np.float64).reshape(-1, 2)
     img = np.asarray(image_px, np.float64).reshape(-1, 2)
     g = np.asarray(gravity_cam, np.float64).reshape(3)
-    g = g / np.linalg.norm(g)
+    g = g / math.sqrt(float(g.dot(g)))
     r = np.asarray(rvec, np.float64).reshape(3).copy()
     t = np.asarray(tvec, np.float64).reshape(3).copy()
     w_px = 1.0 / sigma_px

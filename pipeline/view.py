@@ -95,6 +95,16 @@ class View:
             ]
         )
 
+    @property
+    def to_frame(self) -> np.ndarray:
+        """3 x 3: view pixels -> frame pixels (`matrix`'s inverse, written out: a
+        general inverse costs a frame more than all its arithmetic)."""
+        m = self.matrix
+        sx, sy = m[0, 0], m[1, 1]
+        return np.array(
+            [[1.0 / sx, 0.0, -m[0, 2] / sx], [0.0, 1.0 / sy, -m[1, 2] / sy], [0.0, 0.0, 1.0]]
+        )
+
     def image(self, frame: np.ndarray) -> np.ndarray:
         crop = frame[self.y0 : self.y1, self.x0 : self.x1]
         if self.size == (crop.shape[1], crop.shape[0]):
