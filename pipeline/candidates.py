@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from pipeline.homography_fit import HomographyFit, apply_h, fit_homography
+from pipeline.homography_fit import HomographyFit, apply_h, fit_homography, span_of
 from pipeline.preprocess import Binarized
 from pipeline.reference import H_CORNERS, Reference
 from pipeline.shapes import Region, douglas_peucker, polygon_corners, upsampled_contour
@@ -128,7 +128,7 @@ def locate(cand: Candidate, binary: Binarized, reference: Reference) -> Located 
         if name == "shape":
             H0 = np.vstack([cand.affine, [0.0, 0.0, 1.0]])
             # An affine start may be a few pixels off on a tilted view.
-            search = float(np.clip(0.12 * span, 2.5, 3.0))
+            search = min(max(0.12 * span, 2.5), 3.0)
         else:
             H0 = css_homography(cand.region, binary, reference)
             if H0 is None:
@@ -140,7 +140,7 @@ def locate(cand: Candidate, binary: Binarized, reference: Reference) -> Located 
         fit, unlike = fitted
         deform = reference.h_deformation
         corners = apply_h(fit.H, deform.corners(reference.corners_m, fit.shape))
-        if float(np.ptp(corners, axis=0).max()) < MIN_H_SPAN_PX:
+        if span_of(corners) < MIN_H_SPAN_PX:
             continue
         located = Located(cand, corners, fit, name, unlike)
         if best is None or (located.evidence, -fit.rms_px) > (best.evidence, -best.fit.rms_px):
@@ -341,7 +341,7 @@ def _dlt(src: np.ndarray, dst: np.ndarray) -> np.ndarray | None:
     A[1::2, 8] = -d[:, 1]
     Hn = np.linalg.svd(A)[2][-1].reshape(3, 3)
     H = np.linalg.inv(Td) @ Hn @ Ts
-    if not np.all(np.isfinite(H)) or abs(H[2, 2]) < 1e-12:
+    if not np.isfinite(H).all() or abs(H[2, 2]) < 1e-12:
         return None
     return H / H[2, 2]
 

@@ -28,7 +28,7 @@ from pipeline.candidates import (
     candidates,
     locate,
 )
-from pipeline.homography_fit import apply_h
+from pipeline.homography_fit import apply_h, span_of
 from pipeline.measure import pad_box_m, whole_pad
 from pipeline.preprocess import Binarized, binarize_channel, to_channel
 from pipeline.reference import Reference
@@ -248,7 +248,7 @@ def _check(
     # blob of texture; an H whose sides and shape match this well is no such blob
     # (and a shadow's edge across the pad can hide how it stands out).
     if hit.evidence < SURE_EVIDENCE:
-        stroke = reference.leg_fraction * float(np.ptp(hit.corners, axis=0).max())
+        stroke = reference.leg_fraction * span_of(hit.corners)
         H_inv = np.linalg.inv(hit.fit.H)
         blob = blob_separation(
             binary.smooth,
@@ -258,7 +258,7 @@ def _check(
         )
         if not blob >= MIN_BLOB_SEPARATION:
             return "unclear"
-    span = float(np.ptp(hit.corners, axis=0).max()) / enlarged
+    span = span_of(hit.corners) / enlarged
     if hit.evidence < MIN_EVIDENCE:
         # Strokes of 2 px or a motion blur leave an H's own evidence short of
         # MIN_EVIDENCE; it still counts when the rest of its pad is found around it

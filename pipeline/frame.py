@@ -31,7 +31,7 @@ from pipeline.board_search import MIN_BOARD_SUPPORT, find_boards
 from pipeline.camera import Camera
 from pipeline.candidates import fit_h_sides
 from pipeline.find import CandidateVerifier, Stages, Tally, search
-from pipeline.homography_fit import apply_h
+from pipeline.homography_fit import apply_h, span_of
 from pipeline.measure import MEASURE_SPAN_PX, Measured, measure, pad_box_m
 from pipeline.moments import shape_moments
 from pipeline.pose import pick_by_yaw, to_pose
@@ -365,14 +365,14 @@ def _motion(prior: FrameResult | None, H: np.ndarray) -> np.ndarray | None:
         motion = H @ np.linalg.inv(prior.homography)
     except np.linalg.LinAlgError:
         return None
-    return motion / motion[2, 2] if np.all(np.isfinite(motion)) and motion[2, 2] != 0 else None
+    return motion / motion[2, 2] if np.isfinite(motion).all() and motion[2, 2] != 0 else None
 
 
 def _window(image: np.ndarray, H: np.ndarray, reference: Reference, scale: float) -> View | None:
     """The view (at ``scale``, at most 1) of the pad ``H`` puts in the frame, with room
     for its sides to be found ``FOLLOW_REACH_PX`` away."""
     was = apply_h(H, pad_box_m(reference))
-    span = float(np.ptp(was, axis=0).max())
+    span = span_of(was)
     box = np.concatenate([was.min(axis=0), was.max(axis=0)])
     return View.around(box, image.shape, 0.1 * span + FOLLOW_REACH_PX / min(scale, 1.0), scale)
 
@@ -388,8 +388,8 @@ def _fit_near(
     if fitted is None or fitted[0].support < FOLLOW_SUPPORT:
         return None
     fit = fitted[0]
-    size = float(np.ptp(apply_h(fit.H, reference.corners_m), axis=0).max())
-    size_was = float(np.ptp(apply_h(start, reference.corners_m), axis=0).max())
+    size = span_of(apply_h(fit.H, reference.corners_m))
+    size_was = span_of(apply_h(start, reference.corners_m))
     if not 1 / MAX_FOLLOW_GROWTH <= size / max(size_was, 1e-9) <= MAX_FOLLOW_GROWTH:
         return None
     return view.to_frame @ fit.H
@@ -397,7 +397,7 @@ def _fit_near(
 
 def _pad_span_px(H: np.ndarray, reference: Reference) -> float:
     px = apply_h(H, pad_box_m(reference))
-    return float(np.ptp(px, axis=0).max()) if np.all(np.isfinite(px)) else math.nan
+    return span_of(px) if np.isfinite(px).all() else math.nan
 
 
 def _tracking_view(
@@ -408,10 +408,10 @@ def _tracking_view(
     if prior is None or not prior.detected or prior.homography is None:
         return None
     px = apply_h(prior.homography, pad_box_m(reference))
-    if not np.all(np.isfinite(px)):
+    if not np.isfinite(px).all():
         return None
-    span = float(np.ptp(px, axis=0).max())
-    h_span = float(np.ptp(apply_h(prior.homography, reference.corners_m), axis=0).max())
+    span = span_of(px)
+    h_span = span_of(apply_h(prior.homography, reference.corners_m))
     box = np.concatenate([px.min(axis=0), px.max(axis=0)])
     # A far pad is tracked as finely as the far search found it: enlarged.
     return View.around(
@@ -449,7 +449,7 @@ def _check_gravity(gravity_hint) -> np.ndarray | None:
     except (TypeError, ValueError) as exc:
         raise ValueError(f"gravity_hint must be 3 numbers or None, got {gravity_hint!r}") from exc
     norm = math.sqrt(float(g.dot(g)))  # (np.linalg.norm's arithmetic, without its checks)
-    if not np.all(np.isfinite(g)) or norm < 1e-9:
+    if not np.isfinite(g).all() or norm < 1e-9:
         raise ValueError(f"gravity_hint must be a finite, non-zero 3-vector, got {gravity_hint!r}")
     return g / norm
 

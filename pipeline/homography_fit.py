@@ -86,6 +86,31 @@ def apply_point(H, x, y):
     return (H[0, 0] * x + H[0, 1] * y + H[0, 2]) / w, (H[1, 0] * x + H[1, 1] * y + H[1, 2]) / w
 
 
+def span_of(pts: np.ndarray) -> float:
+    """The larger side of the points' (N x 2) bounding box: ``np.ptp(pts, axis=0).max()``
+    (nan where a coordinate is), in one compiled pass."""
+    return _span(plain(pts).reshape(-1, 2))
+
+
+@compiled_ieee
+def _span(p):
+    if not len(p):
+        return np.nan
+    out = 0.0
+    for c in range(2):
+        lo = hi = p[0, c]
+        for i in range(len(p)):
+            v = p[i, c]
+            if v != v:
+                return np.nan
+            lo, hi = min(lo, v), max(hi, v)
+        d = hi - lo  # (inf - inf: nan, as numpy's)
+        if d != d:
+            return np.nan
+        out = max(out, d) if c else d
+    return out
+
+
 def affine_part(H: np.ndarray, centre_m: np.ndarray) -> np.ndarray:
     """The affine map that agrees with ``H`` at ``centre_m`` to first order."""
     x = np.asarray(centre_m, np.float64)
@@ -150,7 +175,7 @@ def fit_homography(
     # Condition the unknowns: pad metres and pixels both scaled to ~unit size.
     ends, Tm, Tm_inv = model.ends_normalised
     proj0 = apply_h(H, ends)
-    if not np.all(np.isfinite(proj0)):
+    if not np.isfinite(proj0).all():
         return None
     Tp, Tp_inv = normalising(proj0)
     Hn = Tp @ H @ Tm_inv
@@ -183,11 +208,9 @@ def fit_homography(
     )
     if not ok:
         return None
-    H = Tp_inv @ np.append(h, 1.0).reshape(3, 3) @ Tm
+    H = Tp_inv @ np.concatenate((h, [1.0])).reshape(3, 3) @ Tm
     H = H / H[2, 2]
-    seen = np.isfinite(found)
-    share = float(found[seen].mean()) if seen.any() else 0.0
-    return HomographyFit(H, fitted, share, found, shape)
+    return HomographyFit(H, fitted, _seen_mean(found), found, shape)
 
 
 def support(
@@ -200,7 +223,7 @@ def support(
     """
     H = np.asarray(H, np.float64)
     with np.errstate(divide="ignore", invalid="ignore"):
-        if not np.all(np.isfinite(apply_h(H, np.vstack([model.a_m, model.b_m])))):
+        if not np.isfinite(apply_h(H, np.vstack([model.a_m, model.b_m]))).all():
             return 0.0
     pts_m, side = model.samples
     found = side_support(
@@ -218,5 +241,11 @@ def support(
         float(min_side_px),
         MIN_DROP,
     )
-    seen = np.isfinite(found)
-    return float(found[seen].mean()) if seen.any() else 0.0
+    return _seen_mean(found)
+
+
+def _seen_mean(found: np.ndarray) -> float:
+    """The mean of the sides' shares that are not nan (0 when none is): ``.mean()``'s
+    sum and division, without its call's overhead."""
+    seen = found[np.isfinite(found)]
+    return float(seen.sum()) / len(seen) if len(seen) else 0.0

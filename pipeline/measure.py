@@ -23,6 +23,7 @@ from pipeline.homography_fit import (
     affine_part,
     apply_h,
     fit_homography,
+    span_of,
 )
 from pipeline.homography_fit import support as edge_share
 from pipeline.pose import (
@@ -105,7 +106,7 @@ def measure(
     channel, used again when it is already as fine as a measurement needs."""
     outline = pad_box_m(reference)
     px = apply_h(H, outline)
-    span = float(np.ptp(px, axis=0).max())
+    span = span_of(px)
     box = np.concatenate([px.min(axis=0), px.max(axis=0)])
     view = View.around(box, frame.shape, max(4.0, 0.1 * span), MEASURE_SPAN_PX / max(span, 1.0))
     if view is None:
@@ -183,7 +184,7 @@ def whole_pad(
     ``H`` itself (the same object) when the marks were not found or not looked for.
     """
     model = reference.marks_model
-    span = float(np.ptp(apply_h(H, reference.corners_m), axis=0).max())
+    span = span_of(apply_h(H, reference.corners_m))
     if model is None or (span > SELF_SUFFICIENT_PX and not any_size):
         return H
     fit, found = _marks_fit(levels, reference, H)
@@ -258,7 +259,7 @@ def _marks_found(fit: HomographyFit, reference: Reference) -> float:
     use &= (length >= MARK_SIDE_PX) | model.curved
     found = fit.side_found[use]
     found = found[np.isfinite(found)]
-    return float(found.mean()) if len(found) else 0.0
+    return float(found.sum()) / len(found) if len(found) else 0.0
 
 
 def _heading(H: np.ndarray, reference: Reference, levels: np.ndarray) -> tuple[np.ndarray, bool]:
@@ -392,7 +393,7 @@ def _fit_pose(
 
 
 def _span(px: np.ndarray) -> float:
-    return max(float(np.ptp(px, axis=0).max()), 1.0)
+    return max(span_of(px), 1.0)
 
 
 def _tilt_shown(px: np.ndarray, cam: Camera, enlarged: float) -> float:

@@ -92,7 +92,7 @@ class ShapeMatcher:
         centres, whiten, cells = _whitened_rasters([listed[i] for i in index])
         if not len(cells):
             return out
-        rastered = np.nonzero(np.all(np.isfinite(whiten), axis=(1, 2)))[0]
+        rastered = np.nonzero(np.isfinite(whiten).all(axis=(1, 2)))[0]
         iou = _overlaps(self.bits, self.areas, _bits(cells.reshape(len(cells), -1)))
         order, ious, affine = _best_maps(
             iou,
@@ -166,7 +166,8 @@ def _peak_offset(a, b, c):
 def _bits(cells: np.ndarray) -> np.ndarray:
     """Rows of 0/1 cells (K x N uint8) as bits (K x ceil(N / 64) uint64)."""
     packed = np.packbits(cells, axis=1)
-    packed = np.pad(packed, ((0, 0), (0, -packed.shape[1] % 8)))
+    if packed.shape[1] % 8:  # (np.pad costs even when it pads nothing)
+        packed = np.pad(packed, ((0, 0), (0, -packed.shape[1] % 8)))
     return np.ascontiguousarray(packed).view(np.uint64)
 
 
@@ -196,7 +197,7 @@ def _whitened_rasters(polygons: list[np.ndarray]):
     (K x 2), whitening maps (K x 2 x 2, nan for a degenerate polygon) and the
     rasters of those that are not degenerate (in order)."""
     counts = np.array([len(p) for p in polygons], np.int64)
-    start = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+    start = np.concatenate([[0], counts.cumsum()[:-1]]).astype(np.int64)
     mean, whiten, ok, grid = _whiten(np.concatenate(polygons), start, counts)
     cells = np.zeros((int(ok.sum()), GRID, GRID), np.uint8)
     for k, i in enumerate(np.flatnonzero(ok)):

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from pipeline.homography_fit import apply_h
+from pipeline.homography_fit import apply_h, span_of
 from pipeline.jit import plain
 from pipeline.template_kernels import board_and_paint, board_levels, masked_ncc
 
@@ -101,7 +101,7 @@ def compare(
         return NOTHING
     # Large views are compared at most MAX_SIDE_PX across: enough for a pattern.
     f = min(1.0, MAX_SIDE_PX / max(x1 - x0, y1 - y0))
-    frame_span = f * float(np.ptp(outer_px, axis=0).max())
+    frame_span = f * span_of(outer_px)
     ref_span = (1.0 + 2.0 * BOARD_REACH) * size * px_per_m
     shift = np.array([[f, 0.0, -f * x0], [0.0, f, -f * y0], [0.0, 0.0, 1.0]])
     dsize = (max(1, round(f * (x1 - x0))), max(1, round(f * (y1 - y0))))
@@ -160,8 +160,8 @@ def pad_pattern(
     x1, y1 = min(x1, fw), min(y1, fh)
     if x1 - x0 < MIN_SIDE_PX or y1 - y0 < MIN_SIDE_PX or x1 - x0 > 4 * MAX_SIDE_PX:
         return math.nan
-    ref_span = float(np.ptp(outline_m, axis=0).max()) * px_per_m
-    frame_span = float(np.ptp(outline_px, axis=0).max())
+    ref_span = span_of(outline_m) * px_per_m
+    frame_span = span_of(outline_px)
     shift = np.array([[1.0, 0.0, -x0], [0.0, 1.0, -y0], [0.0, 0.0, 1.0]])
     dsize = (int(x1 - x0), int(y1 - y0))
     warped, seen = _warp(pyramid, px_per_m, ref_span / max(frame_span, 1.0), shift @ H, dsize)
@@ -179,7 +179,7 @@ def _warp(
     """The reference warped by ``M`` (pad metres -> output pixels) from the pyramid
     level about as fine as the output (``ratio``: reference over output pixels at
     level 0), and where it is inside the reference picture."""
-    level = int(np.clip(math.floor(math.log2(max(ratio, 1.0))), 0, len(pyramid) - 1))
+    level = min(max(math.floor(math.log2(max(ratio, 1.0))), 0), len(pyramid) - 1)
     k = 2.0**level
     h0, w0 = pyramid[0].shape[:2]
     # Level pixel (u, v) is level-0 pixel (k u, k v) (pyrDown centres its kernel on
