@@ -34,10 +34,10 @@ class Camera:
         if int(self.width) <= 0 or int(self.height) <= 0:
             raise ValueError(f"width and height must be positive, got {self.width}x{self.height}")
         K = np.asarray(self.K, dtype=np.float64)
-        if K.shape != (3, 3) or not np.all(np.isfinite(K)) or K[0, 0] <= 0 or K[1, 1] <= 0:
+        if K.shape != (3, 3) or not np.isfinite(K).all() or K[0, 0] <= 0 or K[1, 1] <= 0:
             raise ValueError("K must be a finite 3x3 camera matrix with positive focal lengths")
         dist = np.asarray(self.dist, dtype=np.float64).ravel()
-        if dist.size not in (4, 5, 8, 12, 14) or not np.all(np.isfinite(dist)):
+        if dist.size not in (4, 5, 8, 12, 14) or not np.isfinite(dist).all():
             raise ValueError("dist must hold 4, 5, 8, 12 or 14 finite distortion coefficients")
         K.setflags(write=False)
         dist.setflags(write=False)
@@ -56,7 +56,7 @@ class Camera:
 
     @property
     def has_distortion(self) -> bool:
-        return bool(np.any(self.dist != 0))
+        return bool((self.dist != 0).any())
 
     @property
     def hfov_deg(self) -> float:

@@ -73,11 +73,15 @@ class EdgeModel:
         return side, t
 
     @cached_property
+    def ends(self) -> np.ndarray:
+        """The sides' starts, then their ends (2S x 2 metres)."""
+        return np.vstack([self.a_m, self.b_m])
+
+    @cached_property
     def ends_normalised(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The sides' starts and ends (2S x 2 metres), and the `normalising` map of them
-        and its inverse (the homography fit's unknowns are conditioned by it)."""
-        ends = np.vstack([self.a_m, self.b_m])
-        return (ends, *normalising(ends))
+        """The sides' starts and ends (`ends`), and the `normalising` map of them and its
+        inverse (the homography fit's unknowns are conditioned by it)."""
+        return (self.ends, *normalising(self.ends))
 
     @cached_property
     def samples(self) -> tuple[np.ndarray, np.ndarray]:
@@ -243,7 +247,7 @@ def _clearance_m(
 def _sides_in_view(model: EdgeModel, camera: Camera, rvec, tvec, min_clearance_px: float):
     """The model's sides' ends in the image, and which sides lie at least
     ``min_clearance_px`` from a side alongside them."""
-    ends, _ = project_plane(np.vstack([model.a_m, model.b_m]), rvec, tvec, camera)
+    ends, _ = project_plane(model.ends, rvec, tvec, camera)
     R, _ = cv2.Rodrigues(rvec)
     depth = 0.5 * (model.a_m + model.b_m) @ R[2, :2] + float(np.asarray(tvec).ravel()[2])
     clearance_px = model.clearance_m * camera.fx / np.maximum(depth, 1e-6)

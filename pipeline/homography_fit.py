@@ -223,7 +223,7 @@ def support(
     """
     H = np.asarray(H, np.float64)
     with np.errstate(divide="ignore", invalid="ignore"):
-        if not np.isfinite(apply_h(H, np.vstack([model.a_m, model.b_m]))).all():
+        if not np.isfinite(apply_h(H, model.ends)).all():
             return 0.0
     pts_m, side = model.samples
     found = side_support(

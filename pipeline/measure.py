@@ -132,7 +132,7 @@ def measure(
         # attitude is left to tell the tilt, from the homography's affine part; the
         # pose must then find the pad's edges (an H of other strokes painted on the
         # floor leans as far, and is no pad).
-        affine = affine_part(Hv, reference.corners_m.mean(axis=0))
+        affine = affine_part(Hv, reference.h_centre_m)
         starts.append((affine, False, AFFINE_MIN_SUPPORT))
     for start, with_marks, min_support in starts:
         Hs, told = _heading(start, reference, levels)
@@ -195,7 +195,7 @@ def whole_pad(
     # placed up to 10 px off, beyond where their edges are looked for). From the
     # homography's affine part the marks are looked for again; kept when clearly more
     # of them are found (a blur hides them from both starts alike).
-    affine = affine_part(H, reference.corners_m.mean(axis=0))
+    affine = affine_part(H, reference.h_centre_m)
     fit_a, found_a = _marks_fit(levels, reference, affine)
     more = found_a >= max(MIN_MARKS_FOUND, found + AFFINE_GAIN)
     if fit_a is not None and more and _in_place(fit_a.H, H, reference, span):
@@ -252,7 +252,7 @@ def _marks_found(fit: HomographyFit, reference: Reference) -> float:
     """The share of the marks' sides (long enough to tell, ``MARK_SIDE_PX``) that the
     whole-pad fit found; the model lists the H's 12 sides first."""
     model = reference.edge_model
-    ends = apply_h(fit.H, np.vstack([model.a_m, model.b_m]))
+    ends = apply_h(fit.H, model.ends)
     n = len(model.a_m)
     length = np.hypot(*(ends[n:] - ends[:n]).T)
     use = np.arange(n) >= len(reference.corners_m)

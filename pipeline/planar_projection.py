@@ -27,7 +27,7 @@ def project_plane(
     r = np.array(rvec, np.float64).reshape(3)
     t = np.array(tvec, np.float64).reshape(3)
     dist = camera.dist
-    if dist.size > 5 and np.any(dist[5:] != 0):
+    if dist.size > 5 and (dist[5:] != 0).any():
         obj = np.column_stack([pts, np.zeros(len(pts))])
         proj, jac = cv2.projectPoints(obj, r, t, camera.K, dist)
         return proj.reshape(-1, 2), jac[:, :6].reshape(len(pts), 2, 6)

@@ -131,6 +131,11 @@ class Reference:
         return out
 
     @cached_property
+    def h_centre_m(self) -> np.ndarray:
+        """The mean of the H's corners (pad metres)."""
+        return self.corners_m.mean(axis=0)
+
+    @cached_property
     def h_edges(self) -> EdgeModel:
         """The H's own sides: what a frame must show for a detection."""
         return EdgeModel.from_polygons([(self.corners_m, True)])
