@@ -24,7 +24,7 @@ import numpy as np
 
 from pipeline import edge_kernels as kernels
 from pipeline.camera import Camera
-from pipeline.jit import pixels
+from pipeline.jit import compiled, pixels, plain
 from pipeline.planar_projection import project_plane
 
 MIN_SIDE_PX = 7.0  # sides shorter than this in the image are not sampled
@@ -126,11 +126,22 @@ class EdgeModel:
 def normalising(pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The scale and shift that takes points (N x 2) to about unit size around the
     origin, and its inverse (3 x 3 each)."""
-    lo, hi = pts.min(axis=0), pts.max(axis=0)
-    c = pts.mean(axis=0)
-    k = 1.0 / max(float((hi - lo).max()), 1e-9)
-    T = np.array([[k, 0.0, -k * c[0]], [0.0, k, -k * c[1]], [0.0, 0.0, 1.0]])
-    T_inv = np.array([[1.0 / k, 0.0, c[0]], [0.0, 1.0 / k, c[1]], [0.0, 0.0, 1.0]])
+    return _normalising(plain(pts).reshape(-1, 2))
+
+
+@compiled
+def _normalising(pts):
+    # (numpy's numbers: the mean over rows summed in their order, as its reduction does)
+    lo0, lo1, hi0, hi1 = pts[0, 0], pts[0, 1], pts[0, 0], pts[0, 1]
+    s0, s1 = 0.0, 0.0
+    for i in range(len(pts)):
+        x, y = pts[i, 0], pts[i, 1]
+        lo0, lo1, hi0, hi1 = min(lo0, x), min(lo1, y), max(hi0, x), max(hi1, y)
+        s0, s1 = s0 + x, s1 + y
+    c0, c1 = s0 / len(pts), s1 / len(pts)
+    k = 1.0 / max(max(hi0 - lo0, hi1 - lo1), 1e-9)
+    T = np.array([[k, 0.0, -k * c0], [0.0, k, -k * c1], [0.0, 0.0, 1.0]])
+    T_inv = np.array([[1.0 / k, 0.0, c0], [0.0, 1.0 / k, c1], [0.0, 0.0, 1.0]])
     return T, T_inv
 
 
