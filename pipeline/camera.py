@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 import cv2
@@ -53,6 +54,17 @@ class Camera:
     @property
     def fy(self) -> float:
         return float(self.K[1, 1])
+
+    @cached_property
+    def brown_conrady(self) -> np.ndarray | None:
+        """(k1, k2, p1, p2, k3), zero where not given; None when the rational or
+        thin-prism terms are used as well (``pipeline.planar_projection`` then asks
+        OpenCV)."""
+        if self.dist.size > 5 and (self.dist[5:] != 0).any():
+            return None
+        k = np.zeros(5)
+        k[: min(5, self.dist.size)] = self.dist[:5]
+        return k
 
     @property
     def has_distortion(self) -> bool:

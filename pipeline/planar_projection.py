@@ -26,13 +26,11 @@ def project_plane(
     pts = plain(pts_m).reshape(-1, 2)
     r = np.array(rvec, np.float64).reshape(3)
     t = np.array(tvec, np.float64).reshape(3)
-    dist = camera.dist
-    if dist.size > 5 and (dist[5:] != 0).any():
+    k = camera.brown_conrady
+    if k is None:
         obj = np.column_stack([pts, np.zeros(len(pts))])
-        proj, jac = cv2.projectPoints(obj, r, t, camera.K, dist)
+        proj, jac = cv2.projectPoints(obj, r, t, camera.K, camera.dist)
         return proj.reshape(-1, 2), jac[:, :6].reshape(len(pts), 2, 6)
-    k = np.zeros(5)
-    k[: min(5, dist.size)] = dist[:5]
     return _project(pts, r, t, camera.K, k)
 
 
