@@ -39,13 +39,19 @@ def _numpy_offsets(img, proj, normal, search):
     return offsets[0] + (kk + 0.5 + np.clip(sub, -0.5, 0.5)) * STEP_PX, ok
 
 
-@pytest.mark.parametrize("search", [1.5, 2.5, 6.0])
-def test_edge_offsets_match_the_numpy_statement(search):
-    rng = np.random.default_rng(3)
-    img = cv2.GaussianBlur(rng.uniform(0, 255, (60, 80)).astype(np.float32), (5, 5), 1.0)
+def _noise_and_points(seed, dtype):
+    """A smoothed noise image (60 x 80) and 400 points in and around it, each with a
+    normal in any direction."""
+    rng = np.random.default_rng(seed)
+    img = cv2.GaussianBlur(rng.uniform(0, 255, (60, 80)).astype(dtype), (5, 5), 1.0)
     proj = rng.uniform(-5, 85, (400, 2))
     angle = rng.uniform(0, 2 * np.pi, 400)
-    normal = np.column_stack([np.cos(angle), np.sin(angle)])
+    return img, proj, np.column_stack([np.cos(angle), np.sin(angle)])
+
+
+@pytest.mark.parametrize("search", [1.5, 2.5, 6.0])
+def test_edge_offsets_match_the_numpy_statement(search):
+    img, proj, normal = _noise_and_points(3, np.float32)
     delta, ok = edge_offsets(img, proj, normal, search, MIN_DROP)
     want_delta, want_ok = _numpy_offsets(img, proj, normal, search)
     np.testing.assert_array_equal(ok, want_ok)
@@ -57,11 +63,7 @@ def test_edge_offsets_match_the_numpy_statement(search):
 def test_a_uint8_image_reads_as_its_float_copy(search):
     # (the frames' smoothed channel is sampled as it is, uint8; points near and past
     # the border take the clamped reads, the rest the unclamped ones)
-    rng = np.random.default_rng(4)
-    img = cv2.GaussianBlur(rng.uniform(0, 255, (60, 80)).astype(np.uint8), (5, 5), 1.0)
-    proj = rng.uniform(-5, 85, (400, 2))
-    angle = rng.uniform(0, 2 * np.pi, 400)
-    normal = np.column_stack([np.cos(angle), np.sin(angle)])
+    img, proj, normal = _noise_and_points(4, np.uint8)
     got = edge_offsets(img, proj, normal, search, MIN_DROP)
     want = edge_offsets(img.astype(np.float32), proj, normal, search, MIN_DROP)
     np.testing.assert_array_equal(got[0], want[0])
