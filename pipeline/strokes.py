@@ -74,7 +74,8 @@ def _stroke_points(c, H, across):
         x1, y1 = apply_point(H, end[s, 0], end[s, 1])
         length_px = math.hypot(x1 - x0, y1 - y0)
         length_m[s] = max(math.hypot(end[s, 0] - start[s, 0], end[s, 1] - start[s, 1]), 1e-12)
-        counts[s] = max(3, int(length_px / STEP_PX))
+        # (a stroke sent to infinity: 3 points, as numpy's cast of it gave)
+        counts[s] = max(3, int(length_px / STEP_PX)) if math.isfinite(length_px) else 3
         px_per_m[s] = length_px / length_m[s]
     m = counts.sum()
     paint = np.empty((len(across), m, 2))
