@@ -4,8 +4,10 @@ threads run while a frame is measured.
 
 Loops over a few hundred numbers written as numpy expressions spend their time in
 the calls' overhead, not in the arithmetic; compiled, they cost what the arithmetic
-costs. ``solve`` is the small linear solve their Gauss-Newton steps share, and
-``column_medians`` the medians the pattern comparison takes.
+costs. ``solve`` is the small linear solve their Gauss-Newton steps share,
+``column_medians`` the medians the pattern comparison takes and ``popcount`` the
+bit count the shape match's overlaps take; ``plain`` and ``pixels`` give the loops
+their inputs in the one layout each is compiled for.
 """
 
 from __future__ import annotations
