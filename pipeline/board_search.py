@@ -28,8 +28,8 @@ import cv2
 import numpy as np
 
 from pipeline.homography_fit import affine_part, fit_homography
+from pipeline.jit import compiled
 from pipeline.measure import pad_box_m
-from pipeline.preprocess import border_pixels
 from pipeline.reference import RELIABLE_H_PX, Reference
 from pipeline.shapes import Region
 from pipeline.template import pad_pattern, pattern_box
@@ -147,18 +147,14 @@ def _grow_boards(
         return []
     seed = np.zeros(win.shape, np.uint8)
     cv2.fillPoly(seed, [(contour - [x0, y0]).astype(np.int32).reshape(-1, 1, 2)], 1)
-    border = border_pixels(win, 2)
-    floor = float(np.median(border))
-    noise = 1.4826 * float(np.median(np.abs(border - floor)))
+    floor, noise = _floor_and_noise(win, 2)
     near = cv2.dilate(seed, np.ones((5, 5), np.uint8)) & (1 - seed)
     core = cv2.dilate(seed, np.ones((9, 9), np.uint8)) & (1 - seed)
     boards = []
     for ring, percent, bridged in ((near, 10.0, False), (core, 5.0, True)):
         # The board's level: beyond the H's blur (a median, the H's light blurred
         # into it, would set the threshold toward the floor's).
-        around = win[ring > 0]
-        darker = float(np.median(around)) < floor
-        contrast = abs(float(np.percentile(around, percent if darker else 100 - percent)) - floor)
+        contrast = _ring_contrast(win, ring, percent, floor)
         if contrast < MIN_BOARD_CONTRAST or noise > MAX_FLOOR_NOISE * contrast:
             continue
         grown = (np.abs(win - floor) > 0.5 * contrast).astype(np.uint8)
@@ -172,6 +168,98 @@ def _grow_boards(
         if quad is not None:
             boards.append(Board(quad + np.array([x0, y0], np.float64), contrast))
     return boards
+
+
+@compiled
+def _floor_and_noise(win, width):
+    """The floor's level around a window (the median of its border band ``width``
+    pixels wide, corners twice) and its noise (1.4826 times the median absolute
+    deviation from it): ``np.median``'s numbers, by counting the uint8 levels."""
+    h, w = win.shape
+    counts = np.zeros(256, np.int64)
+    for y in range(h):
+        for x in range(w):
+            if y < width or y >= h - width:
+                counts[win[y, x]] += 1
+            if x < width or x >= w - width:
+                counts[win[y, x]] += 1
+    n = counts.sum()
+    floor = _median_of_counts(counts, n)
+    half = n // 2
+    mad = _kth_deviation(counts, floor, half)
+    if not n % 2:
+        mad = (_kth_deviation(counts, floor, half - 1) + mad) / 2.0
+    return floor, 1.4826 * mad
+
+
+@compiled
+def _kth_deviation(counts, floor, k):
+    """The ``k``-th smallest (from 0) of the counted levels' distances to ``floor``:
+    the levels nearest it taken first, from either side."""
+    below = int(math.floor(floor))  # (the nearest level at or under the floor)
+    above = below + 1
+    seen = 0
+    while True:
+        d_below = floor - below if below >= 0 else math.inf
+        d_above = above - floor if above < len(counts) else math.inf
+        if d_below <= d_above:
+            seen += counts[below]
+            if seen > k:
+                return d_below
+            below -= 1
+        else:
+            seen += counts[above]
+            if seen > k:
+                return d_above
+            above += 1
+
+
+@compiled
+def _ring_contrast(win, ring, percent, floor):
+    """How far the levels of ``win`` on ``ring`` stand from ``floor``: their
+    ``percent`` percentile's distance when their median is darker than the floor,
+    else their 100 - ``percent`` percentile's (linear, ``np.percentile``'s numbers);
+    0 on an empty ring."""
+    h, w = win.shape
+    counts = np.zeros(256, np.int64)
+    for y in range(h):
+        for x in range(w):
+            if ring[y, x]:
+                counts[win[y, x]] += 1
+    n = counts.sum()
+    if n == 0:
+        return 0.0
+    q = percent if _median_of_counts(counts, n) < floor else 100.0 - percent
+    # numpy's linear interpolation between the two order statistics around the position
+    pos = (n - 1) * (q / 100.0)
+    lo = int(math.floor(pos))
+    if lo >= n - 1:
+        return abs(float(_kth_of_counts(counts, n - 1)) - floor)
+    a = float(_kth_of_counts(counts, lo))
+    b = float(_kth_of_counts(counts, lo + 1))
+    t = pos - lo
+    level = b - (b - a) * (1.0 - t) if t >= 0.5 else a + (b - a) * t
+    return abs(level - floor)
+
+
+@compiled
+def _median_of_counts(counts, n):
+    """The median of ``n`` uint8 levels counted per level (``np.median``'s number)."""
+    half = n // 2
+    if n % 2:
+        return float(_kth_of_counts(counts, half))
+    return (float(_kth_of_counts(counts, half - 1)) + float(_kth_of_counts(counts, half))) / 2.0
+
+
+@compiled
+def _kth_of_counts(counts, k):
+    """The ``k``-th smallest (from 0) of the levels counted per level."""
+    seen = 0
+    for v in range(len(counts)):
+        seen += counts[v]
+        if seen > k:
+            return v
+    return len(counts) - 1
 
 
 def _part_with(grown: np.ndarray, voters: np.ndarray, *, fill: bool) -> np.ndarray:

@@ -16,8 +16,8 @@ import numpy as np
 
 def warm_up() -> float:
     """Process two rendered frames of the default pad (with and without the attitude,
-    which take different paths), so that every compiled loop is compiled and cached.
-    Returns the seconds it took."""
+    which take different paths) and one without it, so that every compiled loop is
+    compiled and cached. Returns the seconds it took."""
     from pipeline import Camera, Reference, process_frame
     from pipeline.render import camera_rotation, make_pad_image, make_scene, render
 
@@ -30,6 +30,13 @@ def warm_up() -> float:
     for gravity in (None, np.array([0.0, 0.0, 1.0])):
         if not process_frame(frame, reference, camera, gravity_hint=gravity).detected:
             raise RuntimeError("the warm-up frame's pad was not found: the vision is broken")
+    # A frame without the pad takes every search, and a dark square holding a bright
+    # mark, the board search's loops.
+    empty = np.full((camera.height, camera.width, 3), 120, np.uint8)
+    empty[100:116, 150:166] = 30
+    empty[105:111, 155:161] = 230
+    if process_frame(empty, reference, camera).detected:
+        raise RuntimeError("the warm-up's empty frame gave a pad: the vision is broken")
     return time.perf_counter() - start
 
 

@@ -15,10 +15,10 @@ from pipeline import Camera, Reference, process_frame
 from pipeline.bench.frames import SCENE_EVERY, make_scenes, make_view
 from pipeline.bench.hint import gravity_hint
 from pipeline.bench.tally import Tally
-from pipeline.board_search import find_boards
+from pipeline.board_search import _floor_and_noise, _ring_contrast, find_boards
 from pipeline.candidates import MIN_H_AREA_PX
 from pipeline.homography_fit import apply_h
-from pipeline.preprocess import binarize_channel, to_channel
+from pipeline.preprocess import binarize_channel, border_pixels, to_channel
 from pipeline.render import get_design, make_pad_image
 from pipeline.render.view import render_view
 from pipeline.shapes import regions
@@ -188,3 +188,33 @@ def test_the_verifier_judges_a_pad_found_by_its_board_too():
     assert yes.seen
     refused = process_frame(pad, reference, CAM, gravity_hint=hint, verifier=no)
     assert not refused.detected and "verifier rejected" in refused.reason
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_boards_levels_are_numpys_median_and_percentile(seed):
+    # The floor's level and noise and a ring's contrast, counted over the uint8 levels,
+    # against numpy's order statistics on windows of every kind: narrow level ranges
+    # (ties everywhere), even and odd counts, a ring of one pixel.
+    rng = np.random.default_rng(seed)
+    for _ in range(300):
+        h, w = (int(v) for v in rng.integers(10, 80, 2))
+        lo, hi = sorted(int(v) for v in rng.integers(0, 256, 2))
+        win = rng.integers(lo, hi + 1, (h, w)).astype(np.uint8)
+        ring = (rng.random((h, w)) < rng.random()).astype(np.uint8)
+        if rng.random() < 0.1:
+            ring[:] = 0
+            ring[rng.integers(h), rng.integers(w)] = 1
+        ring[0, 0] |= not ring.any()
+        border = border_pixels(win, 2)
+        floor = float(np.median(border))
+        assert _floor_and_noise(win, 2) == (
+            floor,
+            1.4826 * float(np.median(np.abs(border - floor))),
+        )
+        around = win[ring > 0]
+        darker = float(np.median(around)) < floor
+        for percent in (10.0, 5.0):
+            q = percent if darker else 100 - percent
+            assert _ring_contrast(win, ring, percent, floor) == abs(
+                float(np.percentile(around, q)) - floor
+            )
