@@ -24,7 +24,7 @@ import numpy as np
 from pipeline.homography_fit import HomographyFit, apply_h, fit_homography, span_of
 from pipeline.preprocess import Binarized
 from pipeline.reference import H_CORNERS, Reference
-from pipeline.shapes import Region, douglas_peucker, polygon_corners, upsampled_contour
+from pipeline.shapes import Region, css_polygon, douglas_peucker, upsampled_contour
 
 MIN_H_AREA_PX = 24.0  # smaller regions carry too few pixels for an H
 MIN_H_SPAN_PX = 8.0  # an H narrower than this is not looked for (see find.SMALL_H_PX)
@@ -264,21 +264,31 @@ def corner_readings(region: Region, binary: Binarized) -> Iterator[np.ndarray]:
     Curvature-scale-space corners on the boundary (traced on a 4x finer grid
     for small candidates), then Douglas-Peucker polygons of the same boundary
     and of the pixel boundary: blur can round a corner off or add a ripple
-    that CSS takes for one, and the cheaper readings are tried only then.
+    that CSS takes for one, and the cheaper readings are tried only then. Each
+    is made when asked for (the caller stops at the first that fits).
     """
     fine = None
     if region.area <= FINE_TRACE_BELOW_PX:
         fine = upsampled_contour(binary.smooth, binary.mask, region, FINE_FACTOR)
     if fine is not None:
         pts, offset = fine
-        for poly in (polygon_corners(pts, H_CORNERS), douglas_peucker(pts, H_CORNERS)):
-            if poly is not None:
-                yield (poly + 0.5) / FINE_FACTOR - 0.5 + offset
+        for poly in _css_then_polygon(pts):
+            yield (poly + 0.5) / FINE_FACTOR - 0.5 + offset
     else:
-        poly = polygon_corners(region.contour, H_CORNERS)
+        _, poly = css_polygon(region.contour, H_CORNERS)
         if poly is not None:
             yield poly
     poly = douglas_peucker(region.contour, H_CORNERS)
+    if poly is not None:
+        yield poly
+
+
+def _css_then_polygon(pts: np.ndarray) -> Iterator[np.ndarray]:
+    """The CSS corners of a boundary, then its Douglas-Peucker polygon."""
+    _, poly = css_polygon(pts, H_CORNERS)
+    if poly is not None:
+        yield poly
+    poly = douglas_peucker(pts, H_CORNERS)
     if poly is not None:
         yield poly
 

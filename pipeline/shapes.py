@@ -54,13 +54,21 @@ def polygon_corners(contour: np.ndarray, count: int) -> np.ndarray | None:
     come to ``count``, a Douglas-Peucker polygon with exactly ``count`` vertices.
     """
     pts = np.asarray(contour).reshape(-1, 2)
-    perimeter = len(pts)
-    sigma = float(np.clip(perimeter / 120.0, 1.0, 3.0))
+    found, poly = css_polygon(pts, count)
+    return poly if found else douglas_peucker(pts, count)
+
+
+def css_polygon(contour: np.ndarray, count: int) -> tuple[bool, np.ndarray | None]:
+    """Whether curvature-scale-space finds ``count`` corners on a closed contour, and
+    those corners, in contour order, when their polygon is positively oriented (else
+    None)."""
+    pts = np.asarray(contour).reshape(-1, 2)
+    sigma = min(max(len(pts) / 120.0, 1.0), 3.0)
     idx = css_corners(pts, True, sigma=sigma)
-    if len(idx) == count:
-        out = pts[np.sort(idx)].astype(np.float64)
-        return out if signed_area(out) > 0 else None
-    return douglas_peucker(pts, count)
+    if len(idx) != count:
+        return False, None
+    out = pts[np.sort(idx)].astype(np.float64)
+    return True, out if signed_area(out) > 0 else None
 
 
 def douglas_peucker(pts: np.ndarray, count: int) -> np.ndarray | None:
