@@ -106,6 +106,7 @@ def css_corners(
     c: float = 1.5,
     t_angle_deg: float = 162.0,
     endpoints: bool = True,
+    fewest: int = 0,
 ) -> np.ndarray:
     """Corners of one ordered contour, as sorted indices into ``curve``.
 
@@ -125,6 +126,10 @@ def css_corners(
         Corners whose angle lies in ``[t_angle_deg, 360 - t_angle_deg]`` are rejected.
     endpoints : bool
         For an open curve, also report its end points (unless within 5 px of a corner).
+    fewest : int
+        For a caller that wants at least this many corners: when fewer candidates pass
+        the round-corner test, they are returned without the false-corner passes
+        (which only remove corners: the result has fewer either way).
 
     Returns
     -------
@@ -153,7 +158,7 @@ def css_corners(
     t_angle = _angle_threshold(t_angle_deg)
     endpoints = _flag(endpoints, "endpoints")
 
-    found = _curve_corners(z, closed, sigma, c, t_angle)
+    found = _curve_corners(z, closed, sigma, c, t_angle, int(fewest))
     if endpoints and not closed and z.size:
         found = _with_endpoints(z, found, z[found])
     return found
@@ -335,9 +340,10 @@ def _kernel(sigma: float) -> tuple[int, np.ndarray]:
 
 
 def _curve_corners(
-    z: np.ndarray, closed: bool, sigma: float, c: float, t_angle: float
+    z: np.ndarray, closed: bool, sigma: float, c: float, t_angle: float, fewest: int = 0
 ) -> np.ndarray:
-    """Steps 3-6 on one curve given as complex points; sorted corner indices."""
+    """Steps 3-6 on one curve given as complex points; sorted corner indices (step 6
+    left out when fewer than ``fewest`` candidates come to it)."""
     n_pts = z.size
     w, kernel = _kernel(sigma)
     if n_pts <= w or n_pts < 3:
@@ -365,7 +371,8 @@ def _curve_corners(
     # Maxima at rounding-noise level lie on straight runs; dropping them is no
     # quantisation (no real corner comes near) but keeps them from cutting arms short.
     cand = cand[curvature[cand] > _K_NOISE]
-    cand = _false_corner_filter(smooth, cand, closed, t_angle, 2 * w)
+    if cand.size >= fewest:
+        cand = _false_corner_filter(smooth, cand, closed, t_angle, 2 * w)
     if not closed:
         cand = cand[(cand >= w) & (cand < w + n_pts)] - w
     return cand.astype(np.intp)

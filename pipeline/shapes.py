@@ -64,7 +64,7 @@ def css_polygon(contour: np.ndarray, count: int) -> tuple[bool, np.ndarray | Non
     None)."""
     pts = np.asarray(contour).reshape(-1, 2)
     sigma = min(max(len(pts) / 120.0, 1.0), 3.0)
-    idx = css_corners(pts, True, sigma=sigma)
+    idx = css_corners(pts, True, sigma=sigma, fewest=count)
     if len(idx) != count:
         return False, None
     out = pts[np.sort(idx)].astype(np.float64)

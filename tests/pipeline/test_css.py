@@ -232,6 +232,27 @@ def test_h_corners_do_not_depend_on_the_contour_start() -> None:
         assert found.shape == base.shape and np.all(gaps <= 1.5)
 
 
+def test_a_caller_wanting_12_corners_gets_the_same_answer_sooner() -> None:
+    # `fewest` skips the false-corner passes where too few candidates reach them: the
+    # answer is the same wherever the full detector finds 12 or more, and under 12
+    # wherever it finds under 12. Blobs of a thresholded noise image and H outlines.
+    rng = np.random.default_rng(3)
+    noise = cv2.GaussianBlur(rng.normal(0, 1, (300, 300)), (0, 0), 4.0)
+    mask = (noise > 0.05).astype(np.uint8)
+    blobs, _ = cv2.findContours(mask, cv2.RETR_LIST, cv2.CHAIN_APPROX_NONE)
+    curves = [c for c in blobs if len(c) >= 20] + [h_contour(s, d)[0] for s in (12, 25) for d in (0, 40)]
+    short = 0
+    for curve in curves:
+        full = css_corners(curve, closed=True)
+        sooner = css_corners(curve, closed=True, fewest=12)
+        if full.size >= 12:
+            assert sooner.tolist() == full.tolist()
+        else:
+            assert sooner.size < 12
+            short += sooner.size != full.size
+    assert len(curves) > 40 and short  # (some were cut short)
+
+
 @pytest.mark.parametrize("radius", [12, 30, 55, 70, 100, 160, 220])
 def test_circle_gives_no_corners(radius: int) -> None:
     contour = filled_contour(lambda m: cv2.circle(m, (250, 250), radius, 1, -1))
