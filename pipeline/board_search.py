@@ -196,7 +196,7 @@ def _floor_and_noise(win, width):
 def _kth_deviation(counts, floor, k):
     """The ``k``-th smallest (from 0) of the counted levels' distances to ``floor``:
     the levels nearest it taken first, from either side."""
-    below = int(math.floor(floor))  # (the nearest level at or under the floor)
+    below = math.floor(floor)  # (the nearest level at or under the floor)
     above = below + 1
     seen = 0
     while True:
@@ -232,7 +232,7 @@ def _ring_contrast(win, ring, percent, floor):
     q = percent if _median_of_counts(counts, n) < floor else 100.0 - percent
     # numpy's linear interpolation between the two order statistics around the position
     pos = (n - 1) * (q / 100.0)
-    lo = int(math.floor(pos))
+    lo = math.floor(pos)
     if lo >= n - 1:
         return abs(float(_kth_of_counts(counts, n - 1)) - floor)
     a = float(_kth_of_counts(counts, lo))

@@ -278,6 +278,7 @@ def _check(
         reference.channel_px_per_m,
         reference.corners_m,
         hit.fit.H,
+        enlarged,
     )
     # nan (a patch too small to compare, a board too dark for a hue) passes.
     if seen.ncc < MIN_TEMPLATE_NCC:

@@ -81,12 +81,15 @@ def compare(
     px_per_m: float,
     corners_m: np.ndarray,
     H: np.ndarray,
+    enlarged: float = 1.0,
 ) -> Comparison:
     """Compare the frame with the reference around the located H.
 
     ``pyramid``: from `reference_pyramid` (level 0 at ``px_per_m`` pixels per
     metre, the pad's centre at the picture's centre). ``H``: pad metres ->
     frame pixels. ``frame_channel``: the frame on the reference's channel.
+    ``enlarged``: how many of these pixels a camera pixel became (an enlarged
+    view of the frame: its blur is as many pixels wide).
     """
     lo, hi = corners_m.min(axis=0), corners_m.max(axis=0)
     size = float((hi - lo).max())
@@ -118,16 +121,28 @@ def compare(
         return Comparison(ncc, math.nan, math.nan, math.nan)
     # Taken on the reference blurred as a camera's frame is, so that on a small view
     # they are the pixels that blur leaves pure (a board a few pixels wide between
-    # the H and the pad's bars takes the paint's light a pixel out).
-    pick = plain(_blurred(warped[..., 3], seen, PICK_BLUR_PX * f), np.float32)
+    # the H and the pad's bars takes the paint's light a pixel out). A camera pixel
+    # is ``f * enlarged`` of these pixels, and its blur as wide.
+    camera_blur = PICK_BLUR_PX * f * enlarged
+    pick = plain(_blurred(warped[..., 3], seen, camera_blur), np.float32)
     board, paint, off_paint = board_and_paint(pick, around, near, 5.0, 95.0, 0.25)
     if np.count_nonzero(board) < 8 or np.count_nonzero(paint) < 4:
         return Comparison(ncc, math.nan, math.nan, math.nan)
     # The frame's colours beside the reference's (the board's brightness, pixel by
     # pixel against the paint nearest it).
     frame_crop = _crop(frame_bgr, x0, y0, x1, y1, dsize)
-    lumas = cv2.merge([cv2.transform(frame_crop, _LUMA_ROW), cv2.transform(warped, _LUMA_ROW4)])
-    lumas = _blurred(lumas, seen, PAIR_BLUR_PX)
+    frame_luma = cv2.transform(frame_crop, _LUMA_ROW)
+    reference_luma = cv2.transform(warped, _LUMA_ROW4)
+    if camera_blur <= PAIR_BLUR_PX:
+        lumas = _blurred(cv2.merge([frame_luma, reference_luma]), seen, PAIR_BLUR_PX)
+    else:
+        # An enlarged view's paint, a few pixels wide, is dimmed by the camera's blur
+        # and its board lit by it: the reference is read as blurred, or its board reads
+        # darker against its paint than any frame's (on the altitude sweep's 1280 x 720
+        # frames at 28-40 m, 0.16 against 0.40-0.45, their pads turned down).
+        lumas = cv2.merge(
+            [_blurred(frame_luma, seen, PAIR_BLUR_PX), _blurred(reference_luma, seen, camera_blur)]
+        )
     _, labels = cv2.distanceTransformWithLabels(
         off_paint, cv2.DIST_L2, 3, labelType=cv2.DIST_LABEL_PIXEL
     )

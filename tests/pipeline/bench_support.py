@@ -1,5 +1,6 @@
 """The bench's own frames in tests: a design's frames as `pipeline.bench --design NAME
---hint [--degrade LEVEL]` renders and scores them (seed 0, 640 x 480 at 60 degrees)."""
+--hint [--degrade LEVEL]` renders and scores them (seed 0, 640 x 480 at 60 degrees),
+and the altitude sweep's (`pipeline.bench --sweep altitude`, seed 0)."""
 
 from __future__ import annotations
 
@@ -45,6 +46,19 @@ def bench_frames(design_name: str, seed: int, i: int, level: str, **changes):
 
 
 @functools.lru_cache(maxsize=4)
+def sweep_frames(design: str, camera: Camera, point: int, altitude: float, j: int):
+    """Frame ``j`` of point ``point`` of ``pipeline.bench --sweep altitude`` (its
+    seeds): the pad's frame, its empty twin, the view, the attitude hint and the
+    reference."""
+    d = get_design(design)
+    scenes = make_scenes(d, [0, 1000 + (point * 40 + j) // SCENE_EVERY % 4], "today", ())
+    view, noise_seed = make_view([0, point, j, 11], camera, d, "today", altitude=(altitude,) * 2)
+    pad = render_view(scenes.pad, camera, view, np.random.default_rng(noise_seed))
+    empty = render_view(scenes.empty, camera, view, np.random.default_rng(noise_seed))
+    reference = _reference(design)
+    return pad, empty, view, gravity_hint(view.R_pad_cam, [0, point, j, 12]), reference
+
+
 def _reference(design_name: str) -> Reference:
     design = get_design(design_name)
     return Reference.from_image(design.draw().image, design.size_m)

@@ -2,8 +2,9 @@
 
 At 20 m the 0.55 m pad spans 15 px of a 640 x 480 frame at 60 degrees, its H 8 px
 with legs of 1.5: on the bench's far views (`pipeline.bench --sweep altitude`) the
-H's corners could not be placed on 12 of 40 frames, while the board around it
-still showed as a quadrilateral.
+H's corners could not be placed on 12 of 40 frames (9 since its board is read as
+the camera blurred the enlarged view), while the board around it still showed as a
+quadrilateral.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from pipeline.render import get_design, make_pad_image
 from pipeline.render.view import render_view
 from pipeline.shapes import regions
 from pipeline.view import View
-from tests.pipeline.bench_support import bench_frames
+from tests.pipeline.bench_support import bench_frames, sweep_frames
 
 CAM = Camera.from_fov(640, 480, 60.0)
 DESIGN = get_design("default")
@@ -52,7 +53,7 @@ def _boards(frame: np.ndarray, reference: Reference) -> tuple[View, list[np.ndar
     return view, find_boards(binary.smooth, shapes, reference, view.scale)
 
 
-@pytest.mark.parametrize("j", [3, 20, 23])
+@pytest.mark.parametrize("j", [11, 19, 23])
 def test_a_pad_whose_h_is_too_small_to_place_is_found_by_its_board(reference, j):
     frame, _, view, hint = _far_view(j)
     res = process_frame(frame, reference, CAM, gravity_hint=hint)
@@ -68,24 +69,11 @@ def test_a_pad_whose_h_is_too_small_to_place_is_found_by_its_board(reference, j)
     assert np.hypot(*(placed - seen)) < 0.5, (placed, seen)
 
 
-def _sweep_view(design: str, camera: Camera, point: int, altitude: float, j: int):
-    """Frame ``j`` of point ``point`` of ``pipeline.bench --sweep altitude`` (its
-    seeds): the pad's frame, its empty twin, the view, the attitude hint and the
-    reference."""
-    d = get_design(design)
-    scenes = make_scenes(d, [0, 1000 + (point * 40 + j) // SCENE_EVERY % 4], "today", ())
-    view, noise_seed = make_view([0, point, j, 11], camera, d, "today", altitude=(altitude,) * 2)
-    pad = render_view(scenes.pad, camera, view, np.random.default_rng(noise_seed))
-    empty = render_view(scenes.empty, camera, view, np.random.default_rng(noise_seed))
-    reference = Reference.from_image(d.draw().image, d.size_m)
-    return pad, empty, view, gravity_hint(view.R_pad_cam, [0, point, j, 12]), reference
-
-
 @pytest.mark.parametrize("j", [20, 26, 29])
 def test_a_board_is_grown_from_its_core_where_the_floor_comes_near_its_rim(j):
     # 18 m: the level right next to the H, blurred toward the floor's, joined the
     # board to the floor's blotches, or set a contrast the floor's noise drowned.
-    frame, _, view, hint, reference = _sweep_view("default", CAM, 13, 18.0, j)
+    frame, _, view, hint, reference = sweep_frames("default", CAM, 13, 18.0, j)
     res = process_frame(frame, reference, CAM, gravity_hint=hint)
     assert res.detected and res.found_by == "board", res.reason
     tally = Tally()
@@ -97,7 +85,7 @@ def test_a_board_is_grown_from_its_core_where_the_floor_comes_near_its_rim(j):
 def test_a_dark_h_painted_on_a_light_floor_is_no_dark_h_on_its_board(j):
     # The dark-on-light pad's H painted straight on the floor, 16 m away: its pattern
     # is the pad's (NCC 0.9), but no board's outline is where the fit puts it.
-    _, empty, _, hint, reference = _sweep_view("dark_on_light", CAM, 13, 16.364, j)
+    _, empty, _, hint, reference = sweep_frames("dark_on_light", CAM, 13, 16.364, j)
     assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected
 
 
@@ -108,7 +96,7 @@ def test_a_pad_32_m_away_on_a_1280x720_frame_is_found_on_the_frame_doubled():
     wide = Camera.from_fov(1280, 720, 60.0)
     found = 0
     for j in range(30, 40):
-        frame, _, _, hint, reference = _sweep_view("default", wide, 17, 32.0, j)
+        frame, _, _, hint, reference = sweep_frames("default", wide, 17, 32.0, j)
         found += process_frame(frame, reference, wide, gravity_hint=hint).detected
     assert found >= 8, found
 

@@ -240,7 +240,8 @@ def test_a_caller_wanting_12_corners_gets_the_same_answer_sooner() -> None:
     noise = cv2.GaussianBlur(rng.normal(0, 1, (300, 300)), (0, 0), 4.0)
     mask = (noise > 0.05).astype(np.uint8)
     blobs, _ = cv2.findContours(mask, cv2.RETR_LIST, cv2.CHAIN_APPROX_NONE)
-    curves = [c for c in blobs if len(c) >= 20] + [h_contour(s, d)[0] for s in (12, 25) for d in (0, 40)]
+    hs = [h_contour(scale, deg)[0] for scale in (12, 25) for deg in (0, 40)]
+    curves = [c for c in blobs if len(c) >= 20] + hs
     short = 0
     for curve in curves:
         full = css_corners(curve, closed=True)

@@ -17,10 +17,13 @@ import pytest
 
 from pipeline import Camera, Reference, process_frame
 from pipeline.bench.hint import gravity_hint
+from pipeline.bench.tally import Tally
 from pipeline.render import camera_rotation, make_pad_image, make_scene, render
 from pipeline.view import View
+from tests.pipeline.bench_support import sweep_frames
 
 CAM = Camera.from_fov(640, 480, 60.0)
+WIDE = Camera.from_fov(1280, 720, 60.0)
 
 
 @pytest.fixture(scope="module")
@@ -83,3 +86,20 @@ def test_a_small_camera_is_enlarged_at_most_twice():
     assert View.enlarged((120, 160, 3), 1280).size == (320, 240)
     assert View.enlarged((720, 1280, 3), 1280).scale == 1.0
     assert View.enlarged((1080, 1920, 3), 1280).scale == 1.0
+
+
+@pytest.mark.parametrize(
+    ("point", "altitude", "j"), [(16, 28.0, 16), (17, 32.0, 15), (18, 36.0, 36), (19, 40.0, 9)]
+)
+def test_a_far_hs_board_on_the_frame_enlarged_is_read_as_the_camera_blurred_it(point, altitude, j):
+    # The altitude sweep's 1280 x 720 frames at 28-40 m, searched doubled: an H of
+    # 10-15 frame pixels. Its board read 0.40-0.45 of the paint beside it against the
+    # picture's 0.16-0.17 (tolerance 0.2) while the picture was blurred as if the view
+    # were the camera's own pixels; blurred as the camera blurs the enlarged view, the
+    # picture's board reads 0.21-0.26 and the frame's 0.29-0.36.
+    frame, _, view, hint, reference = sweep_frames("default", WIDE, point, altitude, j)
+    res = process_frame(frame, reference, WIDE, gravity_hint=hint)
+    assert res.detected and res.found_by == "search", res.reason
+    tally = Tally()
+    tally.score(True, res.pose, view, False)
+    assert tally.pos_pct[0] < 4.0, tally.pos_pct
