@@ -30,7 +30,7 @@ from pipeline.candidates import (
 )
 from pipeline.homography_fit import apply_h, span_of
 from pipeline.measure import pad_box_m, whole_pad
-from pipeline.preprocess import Binarized, binarize_channel, to_channel
+from pipeline.preprocess import Binarized, binarize_channel
 from pipeline.reference import Reference
 from pipeline.shapes import Region, regions
 from pipeline.strokes import cut_through, stroke_samples
@@ -151,6 +151,7 @@ class Stages:
 
 def search(
     image: np.ndarray,
+    channel: np.ndarray,
     reference: Reference,
     camera: Camera,
     *,
@@ -166,7 +167,8 @@ def search(
     H's it holds, best shape first, found as they are asked for (the caller stops
     at the first it can measure).
 
-    ``image``: the view's image (BGR); ``to_frame``: view pixels -> frame pixels
+    ``image``: the view's image (BGR); ``channel``: the image on the reference's
+    channel (`pipeline.preprocess.to_channel`); ``to_frame``: view pixels -> frame pixels
     (a scale and a shift). ``tracking``: the view is the window where the pad was
     a moment ago: an H found there that is clearly an H is the pad (a look-alike
     does not take its place between two frames), so the comparisons with the
@@ -176,9 +178,9 @@ def search(
     """
     projection = reference.projection
     dark = projection.is_gray and projection.polarity == "dark"
-    binary = binarize_channel(to_channel(image, projection), method, dark=dark)
+    binary = binarize_channel(channel, method, dark=dark)
     stages.lap("preprocess")
-    area = float(image.shape[0] * image.shape[1])
+    area = float(channel.shape[0] * channel.shape[1])
     found = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=0.5 * area)
     tally.shapes += len(found)
     stages.lap("contours")

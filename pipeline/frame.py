@@ -165,12 +165,17 @@ def process_frame(
     far = View.enlarged(image.shape, FAR_SEARCH_WIDTH_PX)
     tries.append(("search", far, method))
     far_found: tuple[Binarized, list[Region]] | None = None
+    # (the whole frame is searched three ways: its picture and channel made once)
+    pictures: dict[View, tuple[np.ndarray, np.ndarray]] = {}
     for way, view, how in _with_closer_looks(tries, tally, image.shape, reference):
         if view is None:
             continue
         to_frame = view.to_frame
+        if view not in pictures:
+            picture = view.image(image)
+            pictures[view] = (picture, to_channel(picture, reference.projection))
         binary, shapes, hits = search(
-            view.image(image),
+            *pictures[view],
             reference,
             view.camera(cam),
             method=how,
