@@ -47,17 +47,6 @@ def regions(mask: np.ndarray, *, min_area: float, max_area: float) -> list[Regio
     return out
 
 
-def polygon_corners(contour: np.ndarray, count: int) -> np.ndarray | None:
-    """``count`` corner points of a closed contour, in contour order, or None.
-
-    Curvature-scale-space corners first (the seed's detector); when they do not
-    come to ``count``, a Douglas-Peucker polygon with exactly ``count`` vertices.
-    """
-    pts = np.asarray(contour).reshape(-1, 2)
-    found, poly = css_polygon(pts, count)
-    return poly if found else douglas_peucker(pts, count)
-
-
 def css_polygon(contour: np.ndarray, count: int) -> tuple[bool, np.ndarray | None]:
     """Whether curvature-scale-space finds ``count`` corners on a closed contour, and
     those corners, in contour order, when their polygon is positively oriented (else

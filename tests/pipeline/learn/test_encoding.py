@@ -11,7 +11,7 @@ from pipeline.candidates import match_corners
 from pipeline.learn.data import frame_candidates, stretched_texture
 from pipeline.learn.encoding import Encoder, kabsch_rotation, normalise, polygon_area
 from pipeline.render import camera_rotation, make_pad_image, make_scene, render
-from pipeline.shapes import polygon_corners
+from pipeline.shapes import css_polygon
 
 
 @pytest.fixture(scope="module")
@@ -144,7 +144,8 @@ def test_offsets_see_other_leg_proportions(reference, encoder, fat):
 
 def _read_corners(contour: np.ndarray, reference) -> np.ndarray:
     outline = np.round(contour).astype(np.int32)
-    poly = polygon_corners(outline, len(reference.corners_m))
+    found, poly = css_polygon(outline, len(reference.corners_m))
+    assert found and poly is not None
     area = abs(cv2.contourArea(contour.astype(np.float32)))
     return match_corners(poly, reference.corners_m, area)[0]
 
