@@ -45,7 +45,6 @@ def bench_frames(design_name: str, seed: int, i: int, level: str, **changes):
     return pad, empty, hint, view, _reference(design_name)
 
 
-@functools.lru_cache(maxsize=4)
 def sweep_frames(design: str, camera: Camera, point: int, altitude: float, j: int):
     """Frame ``j`` of point ``point`` of ``pipeline.bench --sweep altitude`` (its
     seeds): the pad's frame, its empty twin, the view, the attitude hint and the
@@ -59,6 +58,7 @@ def sweep_frames(design: str, camera: Camera, point: int, altitude: float, j: in
     return pad, empty, view, gravity_hint(view.R_pad_cam, [0, point, j, 12]), reference
 
 
+@functools.lru_cache(maxsize=4)
 def _reference(design_name: str) -> Reference:
     design = get_design(design_name)
     return Reference.from_image(design.draw().image, design.size_m)
