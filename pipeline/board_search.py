@@ -177,11 +177,13 @@ def _floor_and_noise(win, width):
     deviation from it): ``np.median``'s numbers, by counting the uint8 levels."""
     h, w = win.shape
     counts = np.zeros(256, np.int64)
-    for y in range(h):
-        for x in range(w):
-            if y < width or y >= h - width:
+    for rows in (range(width), range(h - width, h)):
+        for y in rows:
+            for x in range(w):
                 counts[win[y, x]] += 1
-            if x < width or x >= w - width:
+    for y in range(h):
+        for cols in (range(width), range(w - width, w)):
+            for x in cols:
                 counts[win[y, x]] += 1
     n = counts.sum()
     floor = _median_of_counts(counts, n)

@@ -270,14 +270,12 @@ def corner_readings(region: Region, binary: Binarized) -> Iterator[np.ndarray]:
     fine = None
     if region.area <= FINE_TRACE_BELOW_PX:
         fine = upsampled_contour(binary.smooth, binary.mask, region, FINE_FACTOR)
-    if fine is not None:
-        pts, offset = fine
-        for poly in _css_then_polygon(pts):
-            yield (poly + 0.5) / FINE_FACTOR - 0.5 + offset
-    else:
-        _, poly = css_polygon(region.contour, H_CORNERS)
-        if poly is not None:
-            yield poly
+    if fine is None:
+        yield from _css_then_polygon(region.contour)
+        return
+    pts, offset = fine
+    for poly in _css_then_polygon(pts):
+        yield (poly + 0.5) / FINE_FACTOR - 0.5 + offset
     poly = douglas_peucker(region.contour, H_CORNERS)
     if poly is not None:
         yield poly
@@ -285,12 +283,10 @@ def corner_readings(region: Region, binary: Binarized) -> Iterator[np.ndarray]:
 
 def _css_then_polygon(pts: np.ndarray) -> Iterator[np.ndarray]:
     """The CSS corners of a boundary, then its Douglas-Peucker polygon."""
-    _, poly = css_polygon(pts, H_CORNERS)
-    if poly is not None:
-        yield poly
-    poly = douglas_peucker(pts, H_CORNERS)
-    if poly is not None:
-        yield poly
+    for read in (css_polygon, douglas_peucker):
+        poly = read(pts, H_CORNERS)
+        if poly is not None:
+            yield poly
 
 
 def match_corners(

@@ -47,17 +47,16 @@ def regions(mask: np.ndarray, *, min_area: float, max_area: float) -> list[Regio
     return out
 
 
-def css_polygon(contour: np.ndarray, count: int) -> tuple[bool, np.ndarray | None]:
-    """Whether curvature-scale-space finds ``count`` corners on a closed contour, and
-    those corners, in contour order, when their polygon is positively oriented (else
-    None)."""
+def css_polygon(contour: np.ndarray, count: int) -> np.ndarray | None:
+    """The ``count`` curvature-scale-space corners of a closed contour, in contour
+    order, when it finds that many and their polygon is positively oriented; else None."""
     pts = np.asarray(contour).reshape(-1, 2)
     sigma = min(max(len(pts) / 120.0, 1.0), 3.0)
     idx = css_corners(pts, True, sigma=sigma, fewest=count)
     if len(idx) != count:
-        return False, None
+        return None
     out = pts[np.sort(idx)].astype(np.float64)
-    return True, out if signed_area(out) > 0 else None
+    return out if signed_area(out) > 0 else None
 
 
 def douglas_peucker(pts: np.ndarray, count: int) -> np.ndarray | None:

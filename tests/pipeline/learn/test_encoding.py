@@ -144,8 +144,8 @@ def test_offsets_see_other_leg_proportions(reference, encoder, fat):
 
 def _read_corners(contour: np.ndarray, reference) -> np.ndarray:
     outline = np.round(contour).astype(np.int32)
-    found, poly = css_polygon(outline, len(reference.corners_m))
-    assert found and poly is not None
+    poly = css_polygon(outline, len(reference.corners_m))
+    assert poly is not None
     area = abs(cv2.contourArea(contour.astype(np.float32)))
     return match_corners(poly, reference.corners_m, area)[0]
 
