@@ -5,8 +5,17 @@ import math
 import cv2
 import numpy as np
 
-from pipeline.candidates import blob_separation, match_corners
-from pipeline.render import PadGeometry
+from pipeline import Reference
+from pipeline import candidates as candidates_module
+from pipeline.candidates import (
+    CSS_AFTER_NOTHING_FROM_PX,
+    blob_separation,
+    candidates,
+    locate,
+    match_corners,
+)
+from pipeline.preprocess import Binarized
+from pipeline.render import PadGeometry, make_pad_image
 from pipeline.shapes import regions
 
 H = PadGeometry().h_corners_m
@@ -56,3 +65,23 @@ def test_corners_far_from_any_h_are_not_fitted_with_a_homography():
     ordered, residual, homography = match_corners(np.roll(H * 500, 5, axis=0), H, area=2000.0)
     assert homography is not None and residual < 1e-6
     np.testing.assert_allclose(ordered, H * 500, atol=1e-9)
+
+
+def test_a_small_candidate_whose_shape_start_finds_no_h_gets_no_corner_reading(monkeypatch):
+    # An H-shaped mask over a channel with no edges: the shape match's start finds none
+    # of the H's sides. Its CSS corners are read only when it is large enough for
+    # perspective to have put that start out of reach.
+    reference = Reference.from_image(make_pad_image(800), 0.55)
+    read = []
+    monkeypatch.setattr(
+        candidates_module, "css_homography", lambda region, *_: read.append(region.area)
+    )
+    for size in (30.0, 120.0):
+        mask = np.zeros((200, 200), np.uint8)
+        h_px = H * size / np.ptp(H, axis=0).max() + 100.0  # an H spanning size px
+        cv2.fillPoly(mask, [np.round(h_px).astype(np.int32)], 255)
+        flat = np.full(mask.shape, 128, np.uint8)
+        binary = Binarized(gray=flat, smooth=flat, mask=mask, threshold=100.0)
+        (cand,) = candidates(regions(mask, min_area=24, max_area=1e5), reference)
+        assert locate(cand, binary, reference) is None
+    assert len(read) == 1 and math.sqrt(read[0]) >= CSS_AFTER_NOTHING_FROM_PX
