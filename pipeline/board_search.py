@@ -98,7 +98,7 @@ def find_boards(
     widest = min(levels.shape) / (1.5 * ratio)
     small, large = [], []
     for region in shapes:
-        size = float(np.ptp(region.contour, axis=0).max())
+        size = region.span
         if least <= size <= most:
             small.append(region)
         elif most < size <= widest:

@@ -99,17 +99,11 @@ def candidates(
     """Regions whose whitened shape overlaps the reference's H, most alike first
     (the ``top`` most alike)."""
     lo = 0.5 * reference.solidity
-    shaped = [r for r in found if lo <= r.solidity <= 0.97 and _span(r) >= MIN_H_SPAN_PX]
+    shaped = [r for r in found if lo <= r.solidity <= 0.97 and r.span >= MIN_H_SPAN_PX]
     hits = reference.shape.match_many([r.contour for r in shaped], MIN_SHAPE_IOU, top=top)
     out = [Candidate(r, hit.iou, hit.affine) for r, hit in zip(shaped, hits, strict=True) if hit]
     out.sort(key=lambda c: -c.iou)
     return out
-
-
-def _span(region: Region) -> float:
-    """The region's larger side across (pixels between its extreme points)."""
-    _, _, w, h = cv2.boundingRect(region.contour)  # (cheaper than numpy's ptp on a contour)
-    return float(max(w, h) - 1)
 
 
 def locate_all(found: list[Region], binary: Binarized, reference: Reference) -> Iterator[Located]:

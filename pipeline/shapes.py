@@ -19,6 +19,12 @@ class Region:
     area: float
     solidity: float
 
+    @property
+    def span(self) -> float:
+        """The larger side across (pixels between its extreme points)."""
+        _, _, w, h = cv2.boundingRect(self.contour)  # (cheaper than numpy's ptp on a contour)
+        return float(max(w, h) - 1)
+
 
 def regions(mask: np.ndarray, *, min_area: float, max_area: float) -> list[Region]:
     """Boundaries of white regions with area in [min_area, max_area].
