@@ -66,6 +66,7 @@ MIN_BOARD_SHARE = 0.3  # of the quadrilateral, at the board's level (not the mar
 _QUAD_EPS = 0.06  # Douglas-Peucker tolerance, of the hull's perimeter
 _FILL = (0.75, 1.25)  # the grown board's area over its quadrilateral's
 _CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
+_NEAR, _CORE = np.ones((5, 5), np.uint8), np.ones((9, 9), np.uint8)  # the rings' reach
 
 
 @dataclass(frozen=True)
@@ -133,13 +134,13 @@ def _grow_boards(
     mark across the blur and its holes filled (which holds where the floor's blotches
     come near the level next to the mark). Either may fail where the other does not.
     """
-    lo, hi = contour.min(axis=0), contour.max(axis=0)
-    size = float(np.max(hi - lo)) + 1.0
+    x, y, w, h = cv2.boundingRect(contour)
+    size = float(max(w, h))
     if size < MIN_SEED_PX:
         return []
     # A window with room for the whole pad around its H, and some floor.
     half = int(0.75 * ratio * size) + 4
-    cx, cy = (int(v) for v in 0.5 * (lo + hi))
+    cx, cy = (2 * x + w - 1) // 2, (2 * y + h - 1) // 2  # (the box's centre, floored)
     # (cut by the view's edge: a board that reaches it is refused as running into it)
     x0, y0 = max(cx - half, 0), max(cy - half, 0)
     win = levels[y0 : cy + half + 1, x0 : cx + half + 1]
@@ -148,8 +149,8 @@ def _grow_boards(
     seed = np.zeros(win.shape, np.uint8)
     cv2.fillPoly(seed, [(contour - [x0, y0]).astype(np.int32).reshape(-1, 1, 2)], 1)
     floor, noise = _floor_and_noise(win, 2)
-    near = cv2.dilate(seed, np.ones((5, 5), np.uint8)) & (1 - seed)
-    core = cv2.dilate(seed, np.ones((9, 9), np.uint8)) & (1 - seed)
+    near = cv2.dilate(seed, _NEAR) & (1 - seed)
+    core = cv2.dilate(seed, _CORE) & (1 - seed)
     boards = []
     for ring, percent, bridged in ((near, 10.0, False), (core, 5.0, True)):
         # The board's level: beyond the H's blur (a median, the H's light blurred
