@@ -51,7 +51,7 @@ MIN_BLOB_SEPARATION = 3.0  # the region against the band around it, in pooled st
 # A candidate smaller than this (the root of its area, view pixels) whose shape match's
 # start found too few of the H's sides is no H, and its corners are not read (the CSS
 # start): that start is within reach of a small H's sides (perspective bends its corners
-# off their affine places by a fraction of a pixel). On the bench's real-world mix, the
+# off their affine places by under a pixel). On the bench's real-world mix, the
 # CSS corners found an H the start had missed on 3 candidates, of 54-76 px; on the
 # altitude sweep's far frames (640 x 480, 12-24 m), on none of 1,600 smaller ones, whose
 # reading was a third of a frame's time.
