@@ -108,7 +108,7 @@ def find_boards(
     large.sort(key=lambda r: -r.area)
     boards: list[Board] = []
     for seed in small[:MAX_SEEDS] + large[:MAX_LARGE_SEEDS]:
-        for board in _grow_boards(levels, seed.contour, ratio, MIN_BOARD_PX * enlarged):
+        for board in _grow_boards(levels, seed, ratio, MIN_BOARD_PX * enlarged):
             if not any(_same(board.quad, b.quad) for b in boards):
                 boards.append(board)
     boards.sort(key=lambda b: -b.contrast)
@@ -121,9 +121,7 @@ def find_boards(
     return [H for _, H in found]
 
 
-def _grow_boards(
-    levels: np.ndarray, contour: np.ndarray, ratio: float, min_px: float
-) -> list[Board]:
+def _grow_boards(levels: np.ndarray, mark: Region, ratio: float, min_px: float) -> list[Board]:
     """The board around a mark, grown two ways, where it is a quadrilateral the pad's
     size for the mark.
 
@@ -134,7 +132,7 @@ def _grow_boards(
     mark across the blur and its holes filled (which holds where the floor's blotches
     come near the level next to the mark). Either may fail where the other does not.
     """
-    x, y, w, h = cv2.boundingRect(contour)
+    x, y, w, h = mark.box
     size = float(max(w, h))
     if size < MIN_SEED_PX:
         return []
@@ -147,7 +145,7 @@ def _grow_boards(
     if min(win.shape) < 2 * MIN_SEED_PX + 4:
         return []
     seed = np.zeros(win.shape, np.uint8)
-    cv2.fillPoly(seed, [(contour - [x0, y0]).astype(np.int32).reshape(-1, 1, 2)], 1)
+    cv2.fillPoly(seed, [(mark.contour - [x0, y0]).astype(np.int32).reshape(-1, 1, 2)], 1)
     floor, noise = _floor_and_noise(win, 2)
     near = cv2.dilate(seed, _NEAR) & (1 - seed)
     core = cv2.dilate(seed, _CORE) & (1 - seed)

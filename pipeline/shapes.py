@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -19,11 +20,16 @@ class Region:
     area: float
     solidity: float
 
+    @cached_property
+    def box(self) -> tuple[int, int, int, int]:
+        """x, y, width, height of the pixels it covers (its extreme points included)."""
+        x, y, w, h = cv2.boundingRect(self.contour)  # (cheaper than numpy on a contour)
+        return x, y, w, h
+
     @property
     def span(self) -> float:
         """The larger side across (pixels between its extreme points)."""
-        _, _, w, h = cv2.boundingRect(self.contour)  # (cheaper than numpy's ptp on a contour)
-        return float(max(w, h) - 1)
+        return float(max(self.box[2], self.box[3]) - 1)
 
 
 def regions(mask: np.ndarray, *, min_area: float, max_area: float) -> list[Region]:
