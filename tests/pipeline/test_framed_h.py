@@ -1,4 +1,4 @@
-"""An H that hardly stands out from its board counts when the rest of its pad is found.
+"""An H whose own looks fall short counts when the rest of its pad is found around it.
 
 The check that a located H stands out from the band around it
 (``candidates.blob_separation``) tells paint from an H-ish blob of texture. A
@@ -6,7 +6,9 @@ shadow band across the pad with a motion blur over thin strokes leaves a real
 H standing out by 1.6-2.9 pooled deviations, under the bar of 3: on the
 bench's real-world mix those pads were refused as "none clearly an H" though
 their H was placed within a pixel and most of their other marks' edges were
-found where it put them. The pad's marks vouch for it as they do for a weak H
+found where it put them. Glare or an exposure error lifted the board of
+serif_octagon pads, 95-100 % of whose marks were found, 0.21-0.27 over the picture's
+against the tolerance of 0.2. The pad's marks vouch for it as they do for a weak H
 (``find._check``); a look-alike on the floor has none around it.
 """
 
@@ -29,6 +31,17 @@ from tests.pipeline.bench_support import CAM, bench_frames
     ],
 )
 def test_a_framed_h_that_hardly_stands_out_is_found_and_its_empty_twin_is_not(design, i):
+    _found_and_empty_twin_not(design, i)
+
+
+# view 2: glare, a shadow and an exposure error; view 28: an exposure error, 4.6 px of
+# motion blur
+@pytest.mark.parametrize("i", [2, 28])
+def test_a_framed_h_whose_board_reads_off_the_pictures_is_found(i):
+    _found_and_empty_twin_not("serif_octagon", i)
+
+
+def _found_and_empty_twin_not(design: str, i: int) -> None:
     pad, empty, hint, view, reference = bench_frames(design, 0, i, "real")
     res = process_frame(pad, reference, CAM, gravity_hint=hint)
     assert res.detected, res.reason
