@@ -64,6 +64,18 @@ def _reference(design_name: str) -> Reference:
     return Reference.from_image(design.draw().image, design.size_m)
 
 
+def position_error_m(pose, view) -> float:
+    """How far a pose's camera is from the view's (metres), modulo the half turn of a
+    symmetric pad (its twin pose puts the camera at (-x, -y, z))."""
+    found = np.asarray(pose.position_m)
+    return float(
+        min(
+            np.linalg.norm(found - view.position_m),
+            np.linalg.norm(found * [-1, -1, 1] - view.position_m),
+        )
+    )
+
+
 def true_homography(
     position: np.ndarray, R_pad_cam: np.ndarray, camera: Camera = CAM
 ) -> np.ndarray:

@@ -14,11 +14,10 @@ against the tolerance of 0.2. The pad's marks vouch for it as they do for a weak
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 from pipeline import process_frame
-from tests.pipeline.bench_support import CAM, bench_frames
+from tests.pipeline.bench_support import CAM, bench_frames, position_error_m
 
 
 @pytest.mark.parametrize(
@@ -46,10 +45,6 @@ def _found_and_empty_twin_not(design: str, i: int) -> None:
     res = process_frame(pad, reference, CAM, gravity_hint=hint)
     assert res.detected, res.reason
     assert res.pose is not None
-    found = np.asarray(res.pose.position_m)
-    err = min(
-        np.linalg.norm(found - view.position_m),
-        np.linalg.norm(found * [-1, -1, 1] - view.position_m),
-    )
+    err = position_error_m(res.pose, view)
     assert err < 0.05 * float(view.position_m[2]), err
     assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected

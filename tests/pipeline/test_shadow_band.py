@@ -22,7 +22,7 @@ from pipeline.preprocess import smooth_channel
 from pipeline.render import camera_rotation, get_design, make_pad_image, make_scene, render
 from pipeline.render.degrade import Shadow
 from pipeline.template import compare
-from tests.pipeline.bench_support import CAM, bench_frames, true_homography
+from tests.pipeline.bench_support import CAM, bench_frames, position_error_m, true_homography
 
 SIZE_M = 0.55
 
@@ -88,11 +88,6 @@ def test_a_pad_under_a_shadow_band_is_found_and_its_empty_twin_is_not(design, i)
     res = process_frame(pad, reference, CAM, gravity_hint=hint)
     assert res.detected, res.reason
     assert res.pose is not None
-    altitude = float(view.position_m[2])
-    found = np.asarray(res.pose.position_m)
-    err = min(
-        np.linalg.norm(found - view.position_m),
-        np.linalg.norm(found * [-1, -1, 1] - view.position_m),
-    )
-    assert err < 0.05 * altitude, err
+    err = position_error_m(res.pose, view)
+    assert err < 0.05 * float(view.position_m[2]), err
     assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected
