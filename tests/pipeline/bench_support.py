@@ -64,16 +64,20 @@ def _reference(design_name: str) -> Reference:
     return Reference.from_image(design.draw().image, design.size_m)
 
 
-def position_error_m(pose, view) -> float:
-    """How far a pose's camera is from the view's (metres), modulo the half turn of a
-    symmetric pad (its twin pose puts the camera at (-x, -y, z))."""
-    found = np.asarray(pose.position_m)
-    return float(
-        min(
-            np.linalg.norm(found - view.position_m),
-            np.linalg.norm(found * [-1, -1, 1] - view.position_m),
-        )
+def assert_found_and_empty_twin_not(pad, empty, hint, view, reference) -> None:
+    """The pad is found in ``pad`` within 5 % of the altitude (modulo a symmetric pad's
+    half turn: its twin pose puts the camera at (-x, -y, z)), and nothing in ``empty``;
+    the arguments as `bench_frames` returns them."""
+    res = process_frame(pad, reference, CAM, gravity_hint=hint)
+    assert res.detected, res.reason
+    assert res.pose is not None
+    found = np.asarray(res.pose.position_m)
+    err = min(
+        np.linalg.norm(found - view.position_m),
+        np.linalg.norm(found * [-1, -1, 1] - view.position_m),
     )
+    assert err < 0.05 * float(view.position_m[2]), err
+    assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected
 
 
 def true_homography(

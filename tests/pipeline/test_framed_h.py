@@ -16,8 +16,7 @@ from __future__ import annotations
 
 import pytest
 
-from pipeline import process_frame
-from tests.pipeline.bench_support import CAM, bench_frames, position_error_m
+from tests.pipeline.bench_support import assert_found_and_empty_twin_not, bench_frames
 
 
 @pytest.mark.parametrize(
@@ -30,21 +29,11 @@ from tests.pipeline.bench_support import CAM, bench_frames, position_error_m
     ],
 )
 def test_a_framed_h_that_hardly_stands_out_is_found_and_its_empty_twin_is_not(design, i):
-    _found_and_empty_twin_not(design, i)
+    assert_found_and_empty_twin_not(*bench_frames(design, 0, i, "real"))
 
 
 # view 2: glare, a shadow and an exposure error; view 28: an exposure error, 4.6 px of
 # motion blur
 @pytest.mark.parametrize("i", [2, 28])
 def test_a_framed_h_whose_board_reads_off_the_pictures_is_found(i):
-    _found_and_empty_twin_not("serif_octagon", i)
-
-
-def _found_and_empty_twin_not(design: str, i: int) -> None:
-    pad, empty, hint, view, reference = bench_frames(design, 0, i, "real")
-    res = process_frame(pad, reference, CAM, gravity_hint=hint)
-    assert res.detected, res.reason
-    assert res.pose is not None
-    err = position_error_m(res.pose, view)
-    assert err < 0.05 * float(view.position_m[2]), err
-    assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected
+    assert_found_and_empty_twin_not(*bench_frames("serif_octagon", 0, i, "real"))

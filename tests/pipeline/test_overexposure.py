@@ -8,7 +8,7 @@ import pytest
 
 from pipeline import process_frame
 from pipeline.render.degrade import Exposure
-from tests.pipeline.bench_support import CAM, bench_frames, position_error_m
+from tests.pipeline.bench_support import CAM, assert_found_and_empty_twin_not, bench_frames
 
 
 @pytest.mark.parametrize(
@@ -40,10 +40,4 @@ def test_clipped_paint_partly_shadowed_is_allowed_for(design: str) -> None:
     # The real-world mix's view 2 (an exposure error, a shadow, sun glare, JPEG): the
     # ICAO pad's clipped paint reads 244 of 255, its board 0.56 of it against the
     # picture's 0.33.
-    pad, empty, hint, view, reference = bench_frames(design, 0, 2, "real")
-    res = process_frame(pad, reference, CAM, gravity_hint=hint)
-    assert res.detected, res.reason
-    assert res.pose is not None
-    err = position_error_m(res.pose, view)
-    assert err < 0.05 * float(view.position_m[2]), err
-    assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected
+    assert_found_and_empty_twin_not(*bench_frames(design, 0, 2, "real"))

@@ -15,14 +15,19 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline import Reference, process_frame
+from pipeline import Reference
 from pipeline.bench.frames import make_view
 from pipeline.find import BOARD_TOLERANCE
 from pipeline.preprocess import smooth_channel
 from pipeline.render import camera_rotation, get_design, make_pad_image, make_scene, render
 from pipeline.render.degrade import Shadow
 from pipeline.template import compare
-from tests.pipeline.bench_support import CAM, bench_frames, position_error_m, true_homography
+from tests.pipeline.bench_support import (
+    CAM,
+    assert_found_and_empty_twin_not,
+    bench_frames,
+    true_homography,
+)
 
 SIZE_M = 0.55
 
@@ -84,10 +89,4 @@ def _with_real_shadow(design: str, i: int):
     ],
 )
 def test_a_pad_under_a_shadow_band_is_found_and_its_empty_twin_is_not(design, i) -> None:
-    pad, empty, hint, view, reference = _with_real_shadow(design, i)
-    res = process_frame(pad, reference, CAM, gravity_hint=hint)
-    assert res.detected, res.reason
-    assert res.pose is not None
-    err = position_error_m(res.pose, view)
-    assert err < 0.05 * float(view.position_m[2]), err
-    assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected
+    assert_found_and_empty_twin_not(*_with_real_shadow(design, i))
