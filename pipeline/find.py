@@ -301,9 +301,10 @@ def _check(
         return "unlike"
     # Light that saturates the paint lifts the board's level against it; a pattern
     # that matches the reference's almost exactly around the H vouches for the board,
-    # and so do the pad's other marks found around it (on the real-world mix, glare or
-    # an exposure error lifted serif_octagon pads' boards 0.21-0.27 over the picture's,
-    # 95-100 % of their marks found; an H on a floor has no such marks around it).
+    # and so do the pad's other marks found around an H not small (as above; on the
+    # real-world mix, glare or an exposure error lifted serif_octagon pads' boards
+    # 0.21-0.27 over the picture's, 95-100 % of their marks found; an H on a floor has
+    # no such marks around it).
     off = seen.board - seen.reference_board
     if seen.paint >= SATURATED_LUMA and off > 0:
         # Overexposed paint clips: brighter than it reads, it makes its board read
