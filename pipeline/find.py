@@ -251,7 +251,12 @@ def _check(
         return "unclear"
     # (whether the rest of the pad is found around the H: asked at most once)
     framed = functools.cache(functools.partial(_pad_found_around, hit, binary, reference))
-    span = span_of(hit.corners) / enlarged
+    view_span = span_of(hit.corners)
+    span = view_span / enlarged
+
+    def vouched() -> bool:  # (the pad's marks vouch for an H not small: see below)
+        return span >= REJUDGE_BELOW_PX and framed()
+
     # Whether the region stands out from the board around it tells paint from a
     # blob of texture; an H whose sides and shape match this well is no such blob,
     # nor is one with the rest of its pad around it (a shadow band across the pad
@@ -261,7 +266,7 @@ def _check(
     # resolution, the altitude sweep's 640 x 480 pads at 20 m came 2.14 % off
     # against 1.96 %).
     if hit.evidence < SURE_EVIDENCE:
-        stroke = reference.leg_fraction * span_of(hit.corners)
+        stroke = reference.leg_fraction * view_span
         H_inv = np.linalg.inv(hit.fit.H)
         blob = blob_separation(
             binary.smooth,
@@ -269,7 +274,7 @@ def _check(
             stroke,
             lambda px: ~reference.is_paint(apply_h(H_inv, px)),
         )
-        if not blob >= MIN_BLOB_SEPARATION and not (span >= REJUDGE_BELOW_PX and framed()):
+        if not blob >= MIN_BLOB_SEPARATION and not vouched():
             return "unclear"
     if hit.evidence < MIN_EVIDENCE:
         # Strokes of 2 px or a motion blur leave an H's own evidence short of
@@ -312,8 +317,7 @@ def _check(
         off = max(0.0, seen.board - CLIPPED_GAIN * seen.reference_board)
     if seen.hue > MAX_HUE or abs(off) > SURE_BOARD_TOLERANCE:
         return "unframed"
-    sure = seen.ncc >= SURE_NCC or (span >= REJUDGE_BELOW_PX and framed())
-    if abs(off) > BOARD_TOLERANCE and not sure:
+    if abs(off) > BOARD_TOLERANCE and not (seen.ncc >= SURE_NCC or vouched()):
         return "unframed"
     samples = stroke_samples(reference.corners_m, hit.fit.H, reference.is_paint)
     if cut_through(image, reference.projection.weights, samples):
