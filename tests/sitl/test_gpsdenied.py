@@ -21,7 +21,11 @@ def test_gps_lost_over_the_pad_lands_on_vision():
     assert "error" not in run, run
     assert run["outcome"] == "landed", run
     assert "on vision navigation (ExternalNav)" in run["message"]
-    assert run["states"][-5:] == ["switch", "settle", "descend", "final", "landed"], run["states"]
+    # "final" (the pad too close to see: dead-reckoned) is skipped when the vehicle
+    # disarms before the pad has gone unseen for long (a frame still found it close, or a
+    # loaded machine delivered the last frames late): a landing on vision either way.
+    landing = [s for s in run["states"] if s != "final"]
+    assert landing[-4:] == ["switch", "settle", "descend", "landed"], run["states"]
     assert run["touchdown_error_m"] < 0.20
     assert run["gps_off_at_boot_s"] is not None and run["gps_fix_type_at_end"] <= 1
     assert run["vision_positions_sent"] > 50
