@@ -27,6 +27,7 @@ from pipeline.homography_fit import (
 )
 from pipeline.homography_fit import support as edge_share
 from pipeline.pose import (
+    half_turn,
     ippe_candidates,
     project,
     refine_with_gravity,
@@ -75,7 +76,6 @@ MARK_SIDE_PX = 4.0  # a mark's straight side shorter than this (a star's point) 
 MOVED_PX = 1.5
 AFFINE_MIN_SUPPORT = 0.2  # of the pad's edges, for a pose from the H's affine part
 HEADING_MARGIN = 0.05  # of the marks' edges: one half turn must find this many more
-_HALF_TURN = np.diag([-1.0, -1.0, 1.0])  # pad metres turned about the centre
 
 
 @dataclass(frozen=True, eq=False)
@@ -276,7 +276,9 @@ def _heading(H: np.ndarray, reference: Reference, levels: np.ndarray) -> tuple[n
     model = reference.marks_model
     if reference.symmetric or model is None:
         return H, False
-    turned = H @ _HALF_TURN
+    # The H is what was located: its twin is a half turn about the H's centre, which
+    # lies off the pad's where text or a mark sits beside it.
+    turned = H @ half_turn(reference.h_centre_m)
     share, turned_share = edge_share(levels, model, H), edge_share(levels, model, turned)
     told = abs(turned_share - share) >= HEADING_MARGIN
     return (turned if turned_share > share else H), told

@@ -61,18 +61,34 @@ def to_pose(
     return Pose(position, R_pad_cam, rms, symmetric, ambiguous)
 
 
-def turned(pose: Pose) -> Pose:
-    """The pose's twin for a pad that looks the same after a 180 degree turn."""
+def half_turn(centre_m: np.ndarray) -> np.ndarray:
+    """The half turn of the pad plane about ``centre_m`` (x, y metres), as a 3 x 3
+    homography of pad metres."""
+    cx, cy = (float(v) for v in np.asarray(centre_m, np.float64).reshape(2))
+    return np.array([[-1.0, 0.0, 2.0 * cx], [0.0, -1.0, 2.0 * cy], [0.0, 0.0, 1.0]])
+
+
+def turned(pose: Pose, centre_m: np.ndarray | None = None) -> Pose:
+    """The pose's twin for a pad (or an H centred at ``centre_m`` on it, default the
+    pad's centre) that looks the same after a 180 degree turn about that centre."""
+    centre = np.zeros(3)
+    if centre_m is not None:
+        centre[:2] = np.asarray(centre_m, np.float64).reshape(2)
     return Pose(
-        TURN @ pose.position_m, TURN @ pose.R_pad_cam, pose.reprojection_px, True, pose.ambiguous
+        centre + TURN @ (pose.position_m - centre),
+        TURN @ pose.R_pad_cam,
+        pose.reprojection_px,
+        True,
+        pose.ambiguous,
     )
 
 
-def pick_by_yaw(pose: Pose, yaw_hint: float | None) -> Pose:
-    """Of a symmetric pose and its twin, the one whose yaw is nearer ``yaw_hint``."""
+def pick_by_yaw(pose: Pose, yaw_hint: float | None, centre_m: np.ndarray | None = None) -> Pose:
+    """Of a symmetric pose and its twin (turned about ``centre_m``), the one whose yaw is
+    nearer ``yaw_hint``."""
     if yaw_hint is None or not pose.symmetric:
         return pose
-    twin = turned(pose)
+    twin = turned(pose, centre_m)
     return pose if _angle_diff(yaw_of(pose.R_pad_cam), yaw_hint) <= 90.0 else twin
 
 
