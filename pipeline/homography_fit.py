@@ -22,6 +22,10 @@ from pipeline.jit import compiled_ieee, pixels, plain
 
 MIN_SIDE_PX = 1.0  # a stroke end of a small H may be 2 px: still measured
 DAMPING = 1e-3
+# An H's far corners this many times as far from the camera as its near ones: the H
+# would lie at its vanishing line (a pad tilted 35 degrees at the frame's edge, its H
+# a third of the altitude across, reads under 2).
+MAX_DEPTH_RATIO = 4.0
 MIN_CLEARANCE_PX = 1.0  # closer parallel sides blur into one line: not used (a thin
 # stroke's two sides pull each other inward alike, so its middle stays right)
 
@@ -63,6 +67,36 @@ class Deformation:
         if not len(shape):
             return corners_m
         return corners_m + self.a @ shape
+
+
+def seen_from_above(H: np.ndarray, pts_m: np.ndarray) -> bool:
+    """Whether a camera above the pad could see ``pts_m`` (pad metres, N x 2) where
+    ``H`` puts them: every point in front of it, none ``MAX_DEPTH_RATIO`` times as far
+    as another, and the plane not mirrored (pad metres have y up, pixels y down).
+
+    A fit gone astray may still find edges under a few of its sides: an H folded
+    through its vanishing line or mirrored, its corners bunched, is no view of it.
+
+    Examples
+    --------
+    >>> pts = np.array([[-1.0, 1.0], [1.0, 1.0], [1.0, -1.0], [-1.0, -1.0]])
+    >>> view = np.array([[100.0, 0.0, 320.0], [0.0, -100.0, 240.0], [0.0, 0.0, 1.0]])
+    >>> seen_from_above(view, pts), seen_from_above(view @ np.diag([1.0, -1.0, 1.0]), pts)
+    (True, False)
+    >>> seen_from_above(view @ np.array([[1.0, 0, 0], [0, 1, 0], [0.0, 0.9, 1]]), pts)
+    False
+    """
+    H = np.asarray(H, np.float64)
+    pts = np.asarray(pts_m, np.float64).reshape(-1, 2)
+    w = H[2, 0] * pts[:, 0] + H[2, 1] * pts[:, 1] + H[2, 2]
+    sign = np.sign(w[0])
+    if sign == 0 or np.any(np.sign(w) != sign):
+        return False
+    # The map's local area scale is det(H) / w^3: a view from above turns it negative.
+    if np.sign(np.linalg.det(H)) == sign:
+        return False
+    w = np.abs(w)
+    return bool(w.max() <= MAX_DEPTH_RATIO * w.min())
 
 
 def apply_h(H: np.ndarray, pts: np.ndarray) -> np.ndarray:

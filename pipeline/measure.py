@@ -23,6 +23,7 @@ from pipeline.homography_fit import (
     affine_part,
     apply_h,
     fit_homography,
+    seen_from_above,
     span_of,
 )
 from pipeline.homography_fit import support as edge_share
@@ -104,6 +105,8 @@ def measure(
     """Measure the pad located by ``H`` (pad metres -> pixels of ``frame``, whose
     camera is ``camera``). ``found``: the view the H was found in and its smoothed
     channel, used again when it is already as fine as a measurement needs."""
+    if not seen_from_above(H, reference.corners_m):
+        return None  # (a fit folded or mirrored: no pad lying level looks so)
     outline = pad_box_m(reference)
     px = apply_h(H, outline)
     span = span_of(px)

@@ -1,0 +1,44 @@
+"""A located H that no camera above the pad could see is not measured.
+
+An H is mirror-symmetric: a homography that mirrors it puts its corners, relabelled, on
+the H's own, and the edges under them are all found. An H fitted astray on a paved
+floor (a photographed reference, an empty frame from the shared negatives) came out
+mirrored and folded through its vanishing line, its corners bunched at the frame's
+edge; measured, it gave a "detection" with the camera 0.9 m under the ground.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pipeline.homography_fit import MAX_DEPTH_RATIO, seen_from_above
+from pipeline.measure import measure
+from tests.pipeline.bench_support import CAM, bench_frames, true_homography
+
+MIRRORS = {"left-right": np.diag([-1.0, 1.0, 1.0]), "top-bottom": np.diag([1.0, -1.0, 1.0])}
+
+
+@pytest.mark.parametrize("i", [0, 7, 19])
+def test_the_true_h_is_measured_and_its_mirror_images_are_not(i):
+    pad, _, _, view, reference = bench_frames("default", 0, i, "today")
+    H = true_homography(view.position_m, view.R_pad_cam)
+    assert measure(pad, reference, CAM, H, gravity=None) is not None
+    for name, mirror in MIRRORS.items():
+        assert not seen_from_above(H @ mirror, reference.corners_m), name
+        assert measure(pad, reference, CAM, H @ mirror, gravity=None) is None, name
+
+
+def test_an_h_across_its_vanishing_line_or_stretched_into_the_distance_is_not_seen():
+    corners = np.array([[-1.0, 1.0], [1.0, 1.0], [1.0, -1.0], [-1.0, -1.0]])
+    view = np.array([[100.0, 0.0, 320.0], [0.0, -100.0, 240.0], [0.0, 0.0, 1.0]])
+    assert seen_from_above(view, corners)
+    # depth growing along y: the far corners MAX_DEPTH_RATIO times as far, and beyond
+    for k, seen in ((0.99, True), (1.01, False)):
+        slope = (MAX_DEPTH_RATIO * k - 1.0) / (MAX_DEPTH_RATIO * k + 1.0)
+        tilted = view @ np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, slope, 1.0]])
+        assert seen_from_above(tilted, corners) is seen, k
+    # the vanishing line through the H: corners on both sides of it
+    folded = view @ np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 2.0, 1.0]])
+    assert not seen_from_above(folded, corners)
+    assert not seen_from_above(np.zeros((3, 3)), corners)
