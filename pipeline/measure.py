@@ -19,6 +19,7 @@ from pipeline.camera import Camera
 from pipeline.edgefit import EdgeFit, edge_support, fit_edges
 from pipeline.homography_fit import (
     MIN_CLEARANCE_PX,
+    MIN_SIDE_PX,
     HomographyFit,
     affine_part,
     apply_h,
@@ -271,10 +272,13 @@ def _heading(H: np.ndarray, reference: Reference, levels: np.ndarray) -> tuple[n
 
     The H alone looks the same after a half turn; on a pad whose other marks
     do not (a triangle, stars above the H), the turn under which more of the
-    marks' edges are found is the pad's. When both turns find about as few of
-    them (``HEADING_MARGIN``: the marks blurred or too small to see), the frame
-    does not tell the heading: the pose is then reported as a symmetric pad's,
-    for the caller's heading to decide.
+    marks' edges are found is the pad's. The marks' sides long enough to tell
+    (``MARK_SIDE_PX``) decide first; the shorter ones count too when those look
+    the same both ways (a star's points; but a far pad's lettering, its sides a
+    pixel or two, outnumbered its board's and turned it about). When both turns
+    find about as few of them (``HEADING_MARGIN``: the marks blurred or too small
+    to see), the frame does not tell the heading: the pose is then reported as a
+    symmetric pad's, for the caller's heading to decide.
     """
     model = reference.marks_model
     if reference.symmetric or model is None:
@@ -282,9 +286,12 @@ def _heading(H: np.ndarray, reference: Reference, levels: np.ndarray) -> tuple[n
     # The H is what was located: its twin is a half turn about the H's centre, which
     # lies off the pad's where text or a mark sits beside it.
     turned = H @ half_turn(reference.h_centre_m)
-    share, turned_share = edge_share(levels, model, H), edge_share(levels, model, turned)
-    told = abs(turned_share - share) >= HEADING_MARGIN
-    return (turned if turned_share > share else H), told
+    for shortest in (MARK_SIDE_PX, MIN_SIDE_PX):
+        share = edge_share(levels, model, H, shortest)
+        turned_share = edge_share(levels, model, turned, shortest)
+        if abs(turned_share - share) >= HEADING_MARGIN:
+            return (turned if turned_share > share else H), True
+    return (turned if turned_share > share else H), False
 
 
 def _fit_pose(
