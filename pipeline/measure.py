@@ -29,6 +29,7 @@ from pipeline.homography_fit import (
 )
 from pipeline.homography_fit import support as edge_share
 from pipeline.pose import (
+    camera_height_m,
     half_turn,
     ippe_candidates,
     project,
@@ -155,6 +156,8 @@ def measure(
         )
         if fitted is not None and (min_support is None or fitted[1] >= min_support):
             fit, support, ambiguous = fitted
+            if camera_height_m(fit.rvec, fit.tvec) <= 0.0:
+                continue  # (edges taken astray can fit a camera under the ground)
             return Measured(view.to_frame @ Hs, fit, support, ambiguous, told)
     return None
 

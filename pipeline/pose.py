@@ -61,6 +61,21 @@ def to_pose(
     return Pose(position, R_pad_cam, rms, symmetric, ambiguous)
 
 
+def camera_height_m(rvec: np.ndarray, tvec: np.ndarray) -> float:
+    """The camera's height over the pad's plane under OpenCV's pad -> camera pose
+    (negative: under it, where no camera sees a pad lying on the ground).
+
+    Examples
+    --------
+    >>> down = np.diag([1.0, -1.0, -1.0])  # camera axes in the pad frame, looking down
+    >>> rvec, _ = cv2.Rodrigues(down.T)
+    >>> round(camera_height_m(rvec, -down.T @ np.array([0.2, 0.1, 3.0])), 6)
+    3.0
+    """
+    R, _ = cv2.Rodrigues(np.asarray(rvec, np.float64).reshape(3, 1))
+    return float(-(R[:, 2] @ np.asarray(tvec, np.float64).reshape(3)))
+
+
 def half_turn(centre_m: np.ndarray) -> np.ndarray:
     """The half turn of the pad plane about ``centre_m`` (x, y metres), as a 3 x 3
     homography of pad metres."""

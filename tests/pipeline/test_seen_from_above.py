@@ -1,10 +1,12 @@
-"""A located H that no camera above the pad could see is not measured.
+"""A located H, or a pose, that no camera above the pad could see is not taken.
 
 An H is mirror-symmetric: a homography that mirrors it puts its corners, relabelled, on
 the H's own, and the edges under them are all found. An H fitted astray on a paved
 floor (a photographed reference, an empty frame from the shared negatives) came out
 mirrored and folded through its vanishing line, its corners bunched at the frame's
-edge; measured, it gave a "detection" with the camera 0.9 m under the ground.
+edge; measured, it gave a "detection" with the camera 0.9 m under the ground. A
+far pad's H (4 px) fitted astray on a floor passed as seen, and its pose put the
+camera 2 cm under the ground looking up (68 px off its own points).
 """
 
 from __future__ import annotations
@@ -14,6 +16,9 @@ import pytest
 
 from pipeline.homography_fit import MAX_DEPTH_RATIO, seen_from_above
 from pipeline.measure import measure
+from pipeline.pose import camera_height_m, pose_to_vectors
+from pipeline.render import camera_rotation
+from pipeline.result import Pose
 from tests.pipeline.bench_support import CAM, bench_frames, true_homography
 
 MIRRORS = {"left-right": np.diag([-1.0, 1.0, 1.0]), "top-bottom": np.diag([1.0, -1.0, 1.0])}
@@ -42,3 +47,13 @@ def test_an_h_across_its_vanishing_line_or_stretched_into_the_distance_is_not_se
     folded = view @ np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 2.0, 1.0]])
     assert not seen_from_above(folded, corners)
     assert not seen_from_above(np.zeros((3, 3)), corners)
+
+
+@pytest.mark.parametrize("height", [3.0, 0.2, -0.02, -3.0])
+def test_the_cameras_height_over_the_pad_is_told_from_its_pose(height):
+    """Under the ground (a pose of edges taken astray), the height comes out negative."""
+    R_pad_cam = camera_rotation(30.0, tilt_deg=20.0, tilt_dir_deg=45.0)
+    if height < 0:
+        R_pad_cam = np.diag([1.0, -1.0, -1.0]) @ R_pad_cam  # (looking up at the pad's plane)
+    pose = Pose(np.array([0.4, -0.3, height]), R_pad_cam, 0.1, False)
+    assert camera_height_m(*pose_to_vectors(pose)) == pytest.approx(height)
