@@ -28,16 +28,24 @@ PAD_M = 0.6
 PICTURE_PX = 600
 
 
-def _pad_with_text_under_its_h() -> np.ndarray:
-    """A dark board, a white H 0.09 m above the pad's centre, "LAND" under it."""
-    img = np.full((PICTURE_PX, PICTURE_PX, 3), 30, np.uint8)
-    cx, cy, w, h, leg, bar = 300, 210, 220, 260, 58, 50
+WHITE = (235, 235, 235)
+
+
+def _dark_board_with_h(cy: int, w: int, h: int, leg: int, bar: int) -> np.ndarray:
+    """A dark board with a white H centred across it at ``cy`` (picture px)."""
+    img = np.full((PICTURE_PX, PICTURE_PX, 3), 28, np.uint8)
+    cx = PICTURE_PX // 2
     x0, x1, y0, y1 = cx - w // 2, cx + w // 2, cy - h // 2, cy + h // 2
-    white = (235, 235, 235)
-    cv2.rectangle(img, (x0, y0), (x0 + leg, y1), white, -1)
-    cv2.rectangle(img, (x1 - leg, y0), (x1, y1), white, -1)
-    cv2.rectangle(img, (x0, cy - bar // 2), (x1, cy + bar // 2), white, -1)
-    cv2.putText(img, "LAND", (150, 530), cv2.FONT_HERSHEY_DUPLEX, 3.0, white, 8, cv2.LINE_AA)
+    cv2.rectangle(img, (x0, y0), (x0 + leg, y1), WHITE, -1)
+    cv2.rectangle(img, (x1 - leg, y0), (x1, y1), WHITE, -1)
+    cv2.rectangle(img, (x0, cy - bar // 2), (x1, cy + bar // 2), WHITE, -1)
+    return img
+
+
+def _pad_with_text_under_its_h() -> np.ndarray:
+    """A white H 0.09 m above the pad's centre, "LAND" under it."""
+    img = _dark_board_with_h(210, 220, 260, 58, 50)
+    cv2.putText(img, "LAND", (150, 530), cv2.FONT_HERSHEY_DUPLEX, 3.0, WHITE, 8, cv2.LINE_AA)
     return img
 
 
@@ -106,15 +114,9 @@ def test_the_twin_turns_about_the_given_centre():
 
 
 def _pad_with_lettering_under_its_h() -> np.ndarray:
-    """A dark board, a white H 0.04 m above the pad's centre, "HELIPAD" under it."""
-    img = np.full((PICTURE_PX, PICTURE_PX, 3), 25, np.uint8)
-    cx, cy, w, h, leg, bar = 300, 260, 240, 300, 65, 55
-    x0, x1, y0, y1 = cx - w // 2, cx + w // 2, cy - h // 2, cy + h // 2
-    white = (235, 235, 235)
-    cv2.rectangle(img, (x0, y0), (x0 + leg, y1), white, -1)
-    cv2.rectangle(img, (x1 - leg, y0), (x1, y1), white, -1)
-    cv2.rectangle(img, (x0, cy - bar // 2), (x1, cy + bar // 2), white, -1)
-    cv2.putText(img, "HELIPAD", (120, 520), cv2.FONT_HERSHEY_SIMPLEX, 2.0, white, 6, cv2.LINE_AA)
+    """A white H 0.04 m above the pad's centre, "HELIPAD" under it."""
+    img = _dark_board_with_h(260, 240, 300, 65, 55)
+    cv2.putText(img, "HELIPAD", (120, 520), cv2.FONT_HERSHEY_SIMPLEX, 2.0, WHITE, 6, cv2.LINE_AA)
     return img
 
 
