@@ -7,7 +7,9 @@
   Visland, ArUco and AprilTag 3 on the same poses, and range90 (`pipeline.bench.sweep`);
 - ``--report DIR``: the dissertation's experiments reproduced (`pipeline.bench.report`);
 - ``--vector``: the pose on frames drawn another way, the pad as vector polygons
-  (`pipeline.bench.vector`).
+  (`pipeline.bench.vector`);
+- ``--photos DIR [--augment K]``: real photos of H pads, as they are and seen K more
+  ways through real-world degradations (`pipeline.bench.photos`).
 
 One core (OpenCV and the BLAS on one thread, `pipeline.cores`; one torch thread); times
 are wall-clock per frame.

@@ -43,9 +43,24 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="the pose on frames drawn another way: the pad as vector polygons (1-6 m)",
     )
+    parser.add_argument(
+        "--photos",
+        metavar="DIR",
+        help="real photos of H pads with a manifest.json (as ../shared/photos): found in "
+        "their boxes, false positives on the negatives",
+    )
+    parser.add_argument(
+        "--augment",
+        type=int,
+        default=0,
+        metavar="K",
+        help="photos: K more views of each through real-world degradations",
+    )
     args = parser.parse_args(argv)
     if args.frames is not None and args.frames <= 0:
         parser.error("--frames must be positive")
+    if args.augment < 0:
+        parser.error("--augment must be 0 or more")
     methods = [m for m in args.methods.split(",") if m]
     if not methods or any(m not in METHODS for m in methods):
         parser.error(f"--methods must name some of {METHODS}")
@@ -62,6 +77,10 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _dispatch(args: argparse.Namespace, methods: list[str]) -> dict:
+    if args.photos:
+        from pipeline.bench.photos import run_photos
+
+        return run_photos(args.photos, augment=args.augment, seed=args.seed)
     if args.vector:
         from pipeline.bench.vector import run_vector
 

@@ -7,26 +7,24 @@ all 12 corners lie in the hand-checked box around the H, grown by 10 % of its si
 
 from __future__ import annotations
 
-import json
 from functools import cache
 from pathlib import Path
 
 import cv2
-import numpy as np
 import pytest
 
 from pipeline import Camera, Reference, process_frame
+from pipeline.bench.photos import FOV_DEG, in_box, load_manifest, references_of
 
 PHOTOS = Path(__file__).resolve().parents[2].parent / "shared" / "photos"
 pytestmark = pytest.mark.skipif(
     not (PHOTOS / "manifest.json").exists(), reason="../shared/photos is not beside the checkout"
 )
-FOV_DEG = 70.0  # the photos' cameras are unknown; the corners do not depend on it
 
 
 @cache
 def _manifest() -> dict:
-    return json.loads((PHOTOS / "manifest.json").read_text())
+    return load_manifest(PHOTOS)
 
 
 @cache
@@ -40,25 +38,12 @@ def _detect(item: dict, reference: Reference):
     return process_frame(image, reference, Camera.from_fov(w, h, FOV_DEG))
 
 
-def _in_box(corners: np.ndarray, box: list[int]) -> bool:
-    x, y, w, h = box
-    gx, gy = max(3.0, 0.1 * w), max(3.0, 0.1 * h)
-    inside_x = (corners[:, 0] >= x - gx) & (corners[:, 0] <= x + w + gx)
-    inside_y = (corners[:, 1] >= y - gy) & (corners[:, 1] <= y + h + gy)
-    return bool(np.all(inside_x & inside_y))
-
-
 def _references(same_polarity: bool):
     """(design, reference entry): the references drawn in the pads' own polarity, or
     those drawn inverted (a different pad design in fact: dark H for a light one)."""
     if not (PHOTOS / "manifest.json").exists():
         return []
-    out = []
-    for design, info in _manifest()["designs"].items():
-        for ref in info["references"]:
-            if ("inverted" in ref["kind"]) != same_polarity:
-                out.append((design, ref))
-    return out
+    return references_of(_manifest(), same_polarity=same_polarity)
 
 
 @pytest.mark.slow
@@ -72,7 +57,7 @@ def test_positives_are_found_with_their_designs_references():
                 continue
             res = _detect(item, reference)
             total += 1
-            if res.detected and _in_box(res.corners_px, item["h_box"]):
+            if res.detected and in_box(res.corners_px, item["h_box"]):
                 found += 1
             else:
                 why = res.reason or "outside the box"
