@@ -30,7 +30,7 @@ from pipeline.candidates import (
     locate,
 )
 from pipeline.homography_fit import apply_h, span_of
-from pipeline.measure import pad_box_m, whole_pad
+from pipeline.measure import MIN_MARKS_FOUND, pad_box_m, pad_marks
 from pipeline.preprocess import Binarized, binarize_channel
 from pipeline.reference import Reference
 from pipeline.shapes import Region, regions
@@ -42,6 +42,14 @@ BOARD_TOLERANCE = 0.2  # the board's brightness relative to the H's, against the
 # ... and with the pattern this sure (NCC): on the bench's real-world mix, true pads in
 # overexposed views came to NCC 0.97-0.99 and 0.23-0.35 off; look-alikes, to 0.95 at most.
 SURE_NCC, SURE_BOARD_TOLERANCE = 0.97, 0.4
+# An H seen only weakly counts with the rest of its pad found around it; where that
+# rest is its board's outline alone (four straight sides), the outline found nearly
+# whole. Texture, tiles and printed patterns offer straight edges in every direction,
+# and the whole pad's fit bends to reach half of a rim's: on the shared negatives seen
+# through the photos bench's degradations (carpet noise, a printed marker's squares),
+# faint H's of 5-16 px found 0.50-0.74 of a rim around them and were taken for pads;
+# the altitude sweep's thin pads at 7-20 m, their H's as faint, found 0.85-1.0 of theirs.
+MIN_RIM_FOUND = 0.8
 SMALL_H_PX = 14.0  # an H this small counts only with the rest of its pad found
 # ... by its edges, or by the whole pad's pattern (NCC): on the bench's far views
 # (10-20 m), true pads' came to 0.69-0.92 (most over 0.78), clear look-alikes' (an H's
@@ -249,8 +257,12 @@ def _check(
     without ``full``, only whether it is clearly an H on a plain board."""
     if hit.evidence < MIN_FRAMED_EVIDENCE:
         return "unclear"
-    # (whether the rest of the pad is found around the H: asked at most once)
-    framed = functools.cache(functools.partial(_pad_found_around, hit, binary, reference))
+    # (how much of the rest of the pad is found around the H: asked at most once)
+    marks = functools.cache(functools.partial(_marks_found_around, hit, binary, reference))
+
+    def framed() -> bool:
+        return marks() >= MIN_MARKS_FOUND
+
     view_span = span_of(hit.corners)
     span = view_span / enlarged
 
@@ -279,8 +291,9 @@ def _check(
     if hit.evidence < MIN_EVIDENCE:
         # Strokes of 2 px or a motion blur leave an H's own evidence short of
         # MIN_EVIDENCE; it still counts when the rest of its pad is found around it
-        # (which a look-alike mark on the floor has not).
-        if not framed():
+        # (which a look-alike mark on the floor has not): a board's outline alone,
+        # nearly whole (``MIN_RIM_FOUND``).
+        if marks() < (MIN_MARKS_FOUND if reference.painted_marks else MIN_RIM_FOUND):
             return "unclear"
     elif span < _framed_below_px(reference) and not (
         framed() or _pattern_around(hit, binary, reference)
@@ -325,10 +338,10 @@ def _check(
     return ""
 
 
-def _pad_found_around(hit: Located, binary: Binarized, reference: Reference) -> bool:
-    """Whether the pad's other marks are found around the located H (its
-    homography refitted on them, `pipeline.measure.whole_pad`)."""
-    return whole_pad(hit.fit.H, reference, binary.smooth, any_size=True) is not hit.fit.H
+def _marks_found_around(hit: Located, binary: Binarized, reference: Reference) -> float:
+    """The share of the pad's other marks found around the located H, its homography
+    refitted on them (`pipeline.measure.pad_marks`; 0 when they were not found)."""
+    return pad_marks(hit.fit.H, reference, binary.smooth, any_size=True)[1]
 
 
 def _framed_below_px(reference: Reference) -> float:

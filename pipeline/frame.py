@@ -29,7 +29,7 @@ import numpy as np
 
 from pipeline.board_search import MIN_BOARD_SUPPORT, find_boards
 from pipeline.camera import Camera
-from pipeline.candidates import fit_h_sides
+from pipeline.candidates import MIN_EVIDENCE, fit_h_sides
 from pipeline.find import CandidateVerifier, Stages, Tally, search
 from pipeline.homography_fit import apply_h, span_of
 from pipeline.measure import MEASURE_SPAN_PX, Measured, measure, pad_box_m
@@ -200,6 +200,13 @@ def process_frame(
             )
             stages.lap("pose")
             if measured is None:  # no pose of the pad lying level fits it (from this start)
+                continue
+            # An H too faint to count alone counted by the rest of its pad: its pose must
+            # find the pad's edges, as a pad found by its board must (on the photos
+            # bench's degraded negatives, faint H's in carpet noise and a printed
+            # marker's squares posed on 0-17 % of them; the bench's faint H's posed
+            # within 7 % of the altitude, on 30 % and more).
+            if hit.evidence < MIN_EVIDENCE and measured.support < MIN_BOARD_SUPPORT:
                 continue
             contour = apply_h(to_frame, hit.candidate.region.contour.astype(np.float64))
             return _detected(

@@ -190,13 +190,21 @@ def whole_pad(
     looked for only with ``any_size``: to tell whether they are there). Returns
     ``H`` itself (the same object) when the marks were not found or not looked for.
     """
+    return pad_marks(H, reference, levels, any_size=any_size)[0]
+
+
+def pad_marks(
+    H: np.ndarray, reference: Reference, levels: np.ndarray, *, any_size: bool = False
+) -> tuple[np.ndarray, float]:
+    """`whole_pad`'s homography and the share of the marks' sides found with it (at
+    least ``MIN_MARKS_FOUND``; 0 when it is ``H`` itself)."""
     model = reference.marks_model
     span = span_of(apply_h(H, reference.corners_m))
     if model is None or (span > SELF_SUFFICIENT_PX and not any_size):
-        return H
+        return H, 0.0
     fit, found = _marks_fit(levels, reference, H)
     if fit is not None and found >= MIN_MARKS_FOUND and _in_place(fit.H, H, reference, span):
-        return fit.H
+        return fit.H, found
     # The perspective of a small H's homography is mostly its noise, which the marks'
     # distance amplifies (a sheet four times its H's size, the H 13-17 px: its corners
     # placed up to 10 px off, beyond where their edges are looked for). From the
@@ -206,8 +214,8 @@ def whole_pad(
     fit_a, found_a = _marks_fit(levels, reference, affine)
     more = found_a >= max(MIN_MARKS_FOUND, found + AFFINE_GAIN)
     if fit_a is not None and more and _in_place(fit_a.H, H, reference, span):
-        return fit_a.H
-    return H
+        return fit_a.H, found_a
+    return H, 0.0
 
 
 def _marks_fit(

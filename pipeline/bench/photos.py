@@ -127,14 +127,13 @@ def run_photos(photos_dir: str | Path, *, augment: int = 0, seed: int = 0) -> di
     every = [e for _, e in own + references_of(manifest, same_polarity=False)]
     every.append(manifest["default_reference"])
     out = {"photos_dir": str(root), "fov_deg": FOV_DEG}
-    rng = np.random.default_rng(seed)
     for name, views in (("original", 0), ("augmented", augment)):
         if name == "augmented" and not augment:
             break
         score = _Score()
-        for item in manifest["items"]:
+        for index, item in enumerate(manifest["items"]):
             photo = _read(root, item["file"])
-            for k, (image, T) in enumerate(_views(photo, views, rng)):
+            for k, (image, T) in enumerate(_views(photo, views, seed, index)):
                 label = item["file"] if views == 0 else f"{item['file']} #{k}"
                 if item["kind"] == "pos":
                     box = _carried(item["h_box"], T)
@@ -151,12 +150,20 @@ def run_photos(photos_dir: str | Path, *, augment: int = 0, seed: int = 0) -> di
     return out
 
 
-def _views(photo: np.ndarray, count: int, rng: np.random.Generator) -> Iterator:
+def _views(photo: np.ndarray, count: int, seed: int, index: int) -> Iterator:
     """The photo itself (``count`` 0), or ``count`` degraded views of it."""
     if count == 0:
         yield photo, np.eye(3)
-    for _ in range(count):
-        yield degrade_photo(photo, rng)
+    for k in range(count):
+        yield degraded_view(photo, seed, index, k)
+
+
+def degraded_view(
+    photo: np.ndarray, seed: int, index: int, k: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """View ``k`` of the manifest's item ``index`` in a run of seed ``seed`` (each view
+    drawn apart, so that one can be looked at again alone): `degrade_photo`'s."""
+    return degrade_photo(photo, np.random.default_rng([seed, index, k]))
 
 
 def _carried(box: list[float], T: np.ndarray) -> tuple[float, float, float, float]:

@@ -1,0 +1,105 @@
+"""An H too faint to count alone counts by the rest of its pad, on evidence chance does
+not give: a board's outline alone found nearly whole (``find.MIN_RIM_FOUND``), and a
+pose that finds the pad's edges (``frame.MIN_BOARD_SUPPORT``).
+
+Texture, tiles and printed patterns offer straight edges in every direction: on the
+shared negatives seen through the photos bench's degradations (``pipeline.bench.photos``),
+faint H-shaped specks in carpet noise and in a printed marker's squares were taken for
+the pads whose rim the whole pad's fit bent to half find around them. The bench's thin
+pads far away, their H's as faint, have their rim found whole.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+import pipeline.find
+import pipeline.frame
+from pipeline import Camera, Reference, process_frame
+from pipeline.bench.photos import FOV_DEG, degraded_view, load_manifest
+from pipeline.bench.sweep import altitude_points
+from pipeline.measure import MIN_MARKS_FOUND
+from pipeline.render import get_design
+from tests.pipeline.bench_support import CAM, assert_found_and_empty_twin_not, sweep_frames
+
+PHOTOS = Path(__file__).resolve().parents[2].parent / "shared" / "photos"
+needs_photos = pytest.mark.skipif(
+    not (PHOTOS / "manifest.json").exists(), reason="../shared/photos is not beside the checkout"
+)
+
+
+def _thin_far(altitude_m: float, j: int):
+    """Frame ``j`` of the altitude sweep's thin pad at ``altitude_m`` (the point nearest
+    it), as `assert_found_and_empty_twin_not` takes it."""
+    altitudes = altitude_points(get_design("thin"), CAM)
+    point = min(range(len(altitudes)), key=lambda p: abs(altitudes[p] - altitude_m))
+    pad, empty, view, hint, reference = sweep_frames("thin", CAM, point, altitudes[point], j)
+    return pad, empty, hint, view, reference
+
+
+# Its H of 12-17 px, evidence 1.35-1.45: found by its rim alone (0.85-1.0 of it).
+@pytest.mark.slow
+@pytest.mark.parametrize(("altitude_m", "j"), [(15.3, 7), (19.6, 5), (19.6, 10)])
+def test_a_faint_h_far_away_counts_with_its_whole_rim(altitude_m, j, monkeypatch) -> None:
+    frames = _thin_far(altitude_m, j)
+    assert_found_and_empty_twin_not(*frames)
+    # (found by its rim: without the rim's say, it is not)
+    monkeypatch.setattr(pipeline.find, "MIN_RIM_FOUND", 1.01)
+    pad, _, hint, _, reference = frames
+    assert not process_frame(pad, reference, CAM, gravity_hint=hint).detected
+
+
+@cache
+def _reference(file: str) -> Reference:
+    manifest = load_manifest(PHOTOS)
+    entries = [r for d in manifest["designs"].values() for r in d["references"]]
+    entry = next(e for e in [*entries, manifest["default_reference"]] if e["file"] == file)
+    return Reference.from_image(cv2.imread(str(PHOTOS / file)), entry["pad_size_m"])
+
+
+def _negative_view(name: str, seed: int, k: int) -> np.ndarray:
+    """View ``k`` of a shared negative in the photos bench's run of seed ``seed``."""
+    items = load_manifest(PHOTOS)["items"]
+    index = next(i for i, item in enumerate(items) if name in item["file"])
+    return degraded_view(cv2.imread(str(PHOTOS / items[index]["file"])), seed, index, k)[0]
+
+
+def _detected(image: np.ndarray, reference_file: str) -> bool:
+    h, w = image.shape[:2]
+    camera = Camera.from_fov(w, h, FOV_DEG)
+    return process_frame(image, _reference(reference_file), camera).detected
+
+
+@needs_photos
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("negative", "seed", "k", "reference"),
+    [
+        ("neg_111", 1, 2, "refs/dark_block_H_synth.png"),  # carpet noise
+        ("neg_108", 2, 0, "refs/red_on_black_synth_darkbg.png"),  # a printed marker
+        ("neg_110", 4, 1, "refs/red_on_black_synth_darkbg.png"),
+    ],
+)
+def test_a_faint_speck_with_half_a_rim_around_it_is_no_pad(
+    negative, seed, k, reference, monkeypatch
+) -> None:
+    image = _negative_view(negative, seed, k)
+    assert not _detected(image, reference)
+    monkeypatch.setattr(pipeline.find, "MIN_RIM_FOUND", MIN_MARKS_FOUND)
+    assert _detected(image, reference)  # (what half a rim said)
+
+
+@needs_photos
+@pytest.mark.slow
+def test_a_faint_speck_whose_pose_finds_no_pad_edges_is_no_pad(monkeypatch) -> None:
+    """In a printed marker's squares, a faint speck of 7 px with the default pad's
+    marks half found around it, posed on 8 % of the pad's edges."""
+    image = _negative_view("neg_108", 3, 0)
+    assert not _detected(image, "refs/default_pad.png")
+    monkeypatch.setattr(pipeline.frame, "MIN_BOARD_SUPPORT", 0.0)
+    assert _detected(image, "refs/default_pad.png")
