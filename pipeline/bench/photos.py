@@ -11,8 +11,9 @@ the default pad's too, and any detection there is a false positive.
 The renderer's frames share its author's blind spots; these photos do not, but they
 are few. ``--augment K`` sees each photo K more times through what real cameras and
 flights add, the degradations the vision issues name: turned any way, scaled 0.6-1.5,
-tilted (a perspective of up to some 30 degrees), exposure (gamma 0.6-1.6, gain
-0.7-1.3), directional motion blur up to 5 px, sensor noise and JPEG at quality 40-95.
+keystoned (the far side up to a fifth shorter than the near one, as a tilted camera
+sees it), exposure (gamma 0.6-1.6, gain 0.7-1.3), directional motion blur up to 5 px,
+sensor noise and JPEG at quality 40-95.
 The box is carried through the same warp (the upright box around its four corners).
 The canvas beyond the photo is the photo's mean colour: a mirrored border would
 draw symmetric, H-like shapes that are not on the ground.
@@ -34,7 +35,7 @@ from pipeline.cores import use_one_core
 
 FOV_DEG = 70.0  # the photos' cameras are unknown; the corners do not depend on it
 SCALE = (0.6, 1.5)
-MAX_KEYSTONE = 0.25  # perspective: the far edge this much shorter than the near one at most
+MAX_KEYSTONE = 0.25  # the picture's far edge up to 1 - 0.875 / 1.125 (a fifth) shorter
 GAMMA, GAIN = (0.6, 1.6), (0.7, 1.3)
 MAX_BLUR_PX = 5
 MAX_NOISE = 6.0  # sensor noise, levels (0-255), its standard deviation at most
