@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Iterator
 from pathlib import Path
 
 import cv2
@@ -127,36 +126,32 @@ def run_photos(photos_dir: str | Path, *, augment: int = 0, seed: int = 0) -> di
     own = references_of(manifest, same_polarity=True)
     every = [e for _, e in own + references_of(manifest, same_polarity=False)]
     every.append(manifest["default_reference"])
-    out = {"photos_dir": str(root), "fov_deg": FOV_DEG}
-    for name, views in (("original", 0), ("augmented", augment)):
-        if name == "augmented" and not augment:
-            break
-        score = _Score()
-        for index, item in enumerate(manifest["items"]):
-            photo = _read(root, item["file"])
-            for k, (image, T) in enumerate(_views(photo, views, seed, index)):
-                label = item["file"] if views == 0 else f"{item['file']} #{k}"
-                if item["kind"] == "pos":
-                    box = _carried(item["h_box"], T)
-                    for design, entry in own:
-                        if design == item["design"]:
-                            score.positive(image, reference(entry), box, design, label, entry)
-                else:
-                    for entry in every:
-                        score.negative(image, reference(entry), label, entry)
-        out[name] = score.summary()
-        if name == "augmented":
-            out[name]["views_per_photo"] = augment
-            out[name]["seed"] = seed
+    scores = {"original": _Score(), "augmented": _Score()}
+    for index, item in enumerate(manifest["items"]):
+        photo = _read(root, item["file"])  # (read once: seen as it is, then degraded)
+        views = [("original", item["file"], photo, np.eye(3))]
+        for k in range(augment):
+            views.append(
+                ("augmented", f"{item['file']} #{k}", *degraded_view(photo, seed, index, k))
+            )
+        for name, label, image, T in views:
+            score = scores[name]
+            if item["kind"] == "pos":
+                box = _carried(item["h_box"], T)
+                for design, entry in own:
+                    if design == item["design"]:
+                        score.positive(image, reference(entry), box, design, label, entry)
+            else:
+                for entry in every:
+                    score.negative(image, reference(entry), label, entry)
+    out = {"photos_dir": str(root), "fov_deg": FOV_DEG, "original": scores["original"].summary()}
+    if augment:
+        out["augmented"] = {
+            **scores["augmented"].summary(),
+            "views_per_photo": augment,
+            "seed": seed,
+        }
     return out
-
-
-def _views(photo: np.ndarray, count: int, seed: int, index: int) -> Iterator:
-    """The photo itself (``count`` 0), or ``count`` degraded views of it."""
-    if count == 0:
-        yield photo, np.eye(3)
-    for k in range(count):
-        yield degraded_view(photo, seed, index, k)
 
 
 def degraded_view(
