@@ -37,6 +37,15 @@ MIN_SIDE_PX = 6  # frame patches smaller than this are not compared
 MAX_SIDE_PX = 96  # larger ones are compared at this size
 DARK_LUMA = 40.0  # a board this dark has no reliable hue
 MAX_HUE_PIXELS = 1024  # the board's hue: its median over at most this many of its pixels
+# A camera's response curve (a gamma) scales a colour's log-chromaticity, its hue kept:
+# the frame's board is read through the curve, within this range, that makes it as
+# saturated as the reference's. A board under this saturation (the log-chromaticity's
+# length) has no hue for a curve to turn. On the shared photos' orange pads seen through
+# the photos bench's exposures (gamma 0.6-1.6), boards came out 0.4-1.7 times as
+# saturated as their references, their hue 0-18 degrees off (the camera's white balance);
+# the floors that reached the comparison, grey or of another hue (160-170 degrees off).
+EXPOSURE_CURVES = (0.5, 2.0)
+MIN_SATURATION = 0.3
 # A camera's pixel integrates light: the reference warped point by point is sharper
 # than any frame, which matters to a pattern a few pixels across.
 FRAME_BLUR_PX = 0.6
@@ -53,7 +62,8 @@ class Comparison:
     board's luma over the brighter of it and the H's paint nearest it (median
     over the board), in the frame and on the reference. ``hue``: L1 distance of
     the board's chromaticity (r, g, b summing to 1) between frame and reference,
-    nan when either board is too dark to have one. ``paint``: the H's luma in the
+    the frame's exposure curve undone (see `_hue`), nan when either board is too
+    dark to have one. ``paint``: the H's luma in the
     frame (0-255). All nan when the patch is too small or off the frame."""
 
     ncc: float
@@ -253,8 +263,21 @@ def _polygon_mask(poly: np.ndarray, dsize: tuple[int, int]) -> np.ndarray:
 
 
 def _hue(frame_bgr: np.ndarray, ref_bgr: np.ndarray) -> float:
+    """L1 distance of the chromaticities of the frame's board colour and the
+    reference's, the frame's read through the exposure curve (``EXPOSURE_CURVES``)
+    that brings its saturation to the reference's; nan for a board too dark."""
     if frame_bgr @ _LUMA < DARK_LUMA or ref_bgr @ _LUMA < DARK_LUMA:
         return math.nan
-    a = frame_bgr / max(float(frame_bgr.sum()), 1.0)
-    b = ref_bgr / max(float(ref_bgr.sum()), 1.0)
-    return float(np.abs(a - b).sum())
+    seen, wanted = _log_chromaticity(frame_bgr), _log_chromaticity(ref_bgr)
+    saturation = float(np.linalg.norm(wanted))
+    if saturation >= MIN_SATURATION:
+        curve = float(np.linalg.norm(seen)) / saturation
+        seen = seen / min(max(curve, EXPOSURE_CURVES[0]), EXPOSURE_CURVES[1])
+    a, b = np.exp(seen), np.exp(wanted)
+    return float(np.abs(a / a.sum() - b / b.sum()).sum())
+
+
+def _log_chromaticity(bgr: np.ndarray) -> np.ndarray:
+    """The colour's logarithm less its mean: what a gain leaves alone and a gamma scales."""
+    log = np.log(np.maximum(bgr.astype(np.float64), 1.0))
+    return log - log.mean()

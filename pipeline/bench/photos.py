@@ -137,7 +137,7 @@ def run_photos(photos_dir: str | Path, *, augment: int = 0, seed: int = 0) -> di
         for name, label, image, T in views:
             score = scores[name]
             if item["kind"] == "pos":
-                box = _carried(item["h_box"], T)
+                box = carried_box(item["h_box"], T)
                 for design, entry in own:
                     if design == item["design"]:
                         score.positive(image, reference(entry), box, design, label, entry)
@@ -162,7 +162,7 @@ def degraded_view(
     return degrade_photo(photo, np.random.default_rng([seed, index, k]))
 
 
-def _carried(box: list[float], T: np.ndarray) -> tuple[float, float, float, float]:
+def carried_box(box: list[float], T: np.ndarray) -> tuple[float, float, float, float]:
     """The upright box around ``box`` (x, y, width, height) warped by ``T``."""
     x, y, w, h = box
     corners = np.array([[[x, y], [x + w, y], [x + w, y + h], [x, y + h]]], np.float64)
