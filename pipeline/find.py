@@ -95,13 +95,15 @@ class Tally:
     # (evidence, frame box) of the small marks refused in a view that was not enlarged
     small_refused: list[tuple[float, np.ndarray]] = field(default_factory=list)
 
-    def reason(self) -> str:
+    def reason(self, polarity: str = "bright") -> str:
+        """Why no pad was found; ``polarity``: the reference's (the shapes looked at
+        are of the H's shade, "bright" or "dark")."""
         if not self.shapes:
             return "no H-like shape in view"
         if self.rejected:  # (a board's H too, found where no H was located)
             return f"the verifier rejected {self.rejected} H-shaped mark(s)"
         if not self.located:
-            return f"no H among {self.shapes} bright shape(s)"
+            return f"no H among {self.shapes} {polarity} shape(s)"
         for count, why in (
             (self.unclear, "{} H-shaped mark(s), none clearly an H on a plain board"),
             (self.unlike, "{} H-shaped mark(s) that do not look like the reference picture"),

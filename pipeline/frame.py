@@ -234,7 +234,7 @@ def process_frame(
                     measured, reference, outline, yaw_hint, "board", mask, stages, t_start, prior
                 )
         stages.lap("board")
-    return _nothing(stages.timings, t_start, tally.reason(), mask)
+    return _nothing(stages.timings, t_start, tally.reason(reference.polarity), mask)
 
 
 def _with_closer_looks(

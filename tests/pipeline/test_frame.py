@@ -1,5 +1,6 @@
 import json
 import math
+import re
 
 import cv2
 import numpy as np
@@ -106,6 +107,20 @@ def test_no_pad_no_detection_and_no_exception(reference, pad):
         if not res.detected:
             assert res.pose is None and res.reason
     assert hits == 0
+
+
+def test_the_reason_names_the_shade_of_shapes_looked_at(reference, pad):
+    """A dark H is looked for among dark shapes, and the reason says so."""
+    frame = np.full((480, 640, 3), 200, np.uint8)
+    cv2.circle(frame, (320, 240), 60, (40, 40, 40), -1)
+    cv2.rectangle(frame, (100, 100), (160, 130), (230, 230, 230), -1)
+    dark = Reference.from_image(cv2.bitwise_not(pad), 0.55)
+    assert dark.polarity == "dark" and reference.polarity == "bright"
+    # (the count is over every threshold and view tried)
+    assert re.fullmatch(r"no H among \d+ dark shape\(s\)", process_frame(frame, dark, CAM).reason)
+    assert re.fullmatch(
+        r"no H among \d+ bright shape\(s\)", process_frame(frame, reference, CAM).reason
+    )
 
 
 def test_blank_frame(reference):
