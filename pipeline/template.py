@@ -63,8 +63,8 @@ class Comparison:
     over the board), in the frame and on the reference. ``hue``: L1 distance of
     the board's chromaticity (r, g, b summing to 1) between frame and reference,
     the frame's exposure curve undone (see `_hue`), nan when either board is too
-    dark to have one. ``paint``: the H's luma in the
-    frame (0-255). All nan when the patch is too small or off the frame."""
+    dark to have one. ``paint``: the H's luma in the frame (0-255). All nan when
+    the patch is too small or off the frame."""
 
     ncc: float
     board: float
