@@ -1,13 +1,16 @@
 """The bench's own frames in tests: a design's frames as `pipeline.bench --design NAME
 --hint [--degrade LEVEL]` renders and scores them (seed 0, 640 x 480 at 60 degrees),
-and the altitude sweep's (`pipeline.bench --sweep altitude`, seed 0)."""
+and the altitude sweep's (`pipeline.bench --sweep altitude`, seed 0); and where the
+photos bench's real photos lie (``../shared/photos``, beside the checkout)."""
 
 from __future__ import annotations
 
 import dataclasses
 import functools
+from pathlib import Path
 
 import numpy as np
+import pytest
 
 from pipeline import Camera, Reference, process_frame
 from pipeline.bench.frames import SCENE_EVERY, make_scenes, make_view
@@ -17,6 +20,10 @@ from pipeline.render import get_design
 from pipeline.render.view import render_view
 
 CAM = Camera.from_fov(640, 480, 60.0)
+PHOTOS = Path(__file__).resolve().parents[2].parent / "shared" / "photos"
+needs_photos = pytest.mark.skipif(
+    not (PHOTOS / "manifest.json").exists(), reason="../shared/photos is not beside the checkout"
+)
 
 
 def score_bench_frames(design_name: str, frames: tuple[int, ...], level: str = "today") -> Tally:

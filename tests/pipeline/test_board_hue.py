@@ -9,7 +9,7 @@ grey and green floors, whose hue no curve turns to orange, do not.
 
 from __future__ import annotations
 
-from pathlib import Path
+from functools import cache
 
 import cv2
 import numpy as np
@@ -20,16 +20,14 @@ from pipeline import Camera, Reference, process_frame
 from pipeline.bench.photos import FOV_DEG, carried_box, degraded_view, in_box, load_manifest
 from pipeline.find import MAX_HUE
 from pipeline.template import _hue
+from tests.pipeline.bench_support import PHOTOS, needs_photos
 
-PHOTOS = Path(__file__).resolve().parents[2].parent / "shared" / "photos"
 ORANGE = np.array([47.0, 108.0, 181.0])  # B, G, R: the rectified orange pad's board
+ANOTHER_CAMERA = np.array([22.0, 47.0, 135.0])  # the same pad in another photo (13 deg off)
 
 
 def _curved(bgr: np.ndarray, gamma: float, gain: float = 1.0) -> np.ndarray:
     return 255.0 * gain * (bgr / 255.0) ** gamma
-
-
-ANOTHER_CAMERA = np.array([22.0, 47.0, 135.0])  # the same pad in another photo (13 deg off)
 
 
 @pytest.mark.parametrize("gamma", [0.55, 0.8, 1.25, 1.6, 1.9])
@@ -63,9 +61,13 @@ def test_a_board_without_colour_is_read_as_it_is() -> None:
     assert _hue(np.array([60.0, 180.0, 60.0]), white) > MAX_HUE  # (a green board)
 
 
-@pytest.mark.skipif(
-    not (PHOTOS / "manifest.json").exists(), reason="../shared/photos is not beside the checkout"
-)
+@cache
+def _orange_reference() -> Reference:
+    picture = cv2.imread(str(PHOTOS / "refs" / "orange_rectified.png"), cv2.IMREAD_COLOR)
+    return Reference.from_image(picture, 1.1)
+
+
+@needs_photos
 @pytest.mark.parametrize(("seed", "k"), [(2, 0), (3, 1), (4, 0)])
 def test_a_real_orange_pad_seen_darker_keeps_its_board(seed, k, monkeypatch) -> None:
     """A real photo's orange pad in the photos bench's views that a curve darkened (gamma
@@ -77,9 +79,7 @@ def test_a_real_orange_pad_seen_darker_keeps_its_board(seed, k, monkeypatch) -> 
     )
     photo = cv2.imread(str(PHOTOS / item["file"]), cv2.IMREAD_COLOR)
     view, T = degraded_view(photo, seed, index, k)
-    reference = Reference.from_image(
-        cv2.imread(str(PHOTOS / "refs" / "orange_rectified.png"), cv2.IMREAD_COLOR), 1.1
-    )
+    reference = _orange_reference()
     camera = Camera.from_fov(view.shape[1], view.shape[0], FOV_DEG)
     res = process_frame(view, reference, camera)
     assert res.detected and in_box(res.corners_px, carried_box(item["h_box"], T)), res.reason

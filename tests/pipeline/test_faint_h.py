@@ -12,7 +12,6 @@ pads far away, their H's as faint, have their rim found whole.
 from __future__ import annotations
 
 from functools import cache
-from pathlib import Path
 
 import cv2
 import numpy as np
@@ -25,11 +24,12 @@ from pipeline.bench.photos import FOV_DEG, degraded_view, load_manifest
 from pipeline.bench.sweep import altitude_points
 from pipeline.measure import MIN_MARKS_FOUND
 from pipeline.render import get_design
-from tests.pipeline.bench_support import CAM, assert_found_and_empty_twin_not, sweep_frames
-
-PHOTOS = Path(__file__).resolve().parents[2].parent / "shared" / "photos"
-needs_photos = pytest.mark.skipif(
-    not (PHOTOS / "manifest.json").exists(), reason="../shared/photos is not beside the checkout"
+from tests.pipeline.bench_support import (
+    CAM,
+    PHOTOS,
+    assert_found_and_empty_twin_not,
+    needs_photos,
+    sweep_frames,
 )
 
 

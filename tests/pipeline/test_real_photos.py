@@ -8,18 +8,15 @@ all 12 corners lie in the hand-checked box around the H, grown by 10 % of its si
 from __future__ import annotations
 
 from functools import cache
-from pathlib import Path
 
 import cv2
 import pytest
 
 from pipeline import Camera, Reference, process_frame
 from pipeline.bench.photos import FOV_DEG, in_box, load_manifest, references_of
+from tests.pipeline.bench_support import PHOTOS, needs_photos
 
-PHOTOS = Path(__file__).resolve().parents[2].parent / "shared" / "photos"
-pytestmark = pytest.mark.skipif(
-    not (PHOTOS / "manifest.json").exists(), reason="../shared/photos is not beside the checkout"
-)
+pytestmark = needs_photos
 
 
 @cache

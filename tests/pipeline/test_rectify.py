@@ -8,7 +8,6 @@ when absent) must give an outline from which a reference can be made.
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import cv2
 import numpy as np
@@ -17,8 +16,8 @@ import pytest
 from pipeline import Reference
 from pipeline.rectify import order_corners, rectify, suggest_outline
 from pipeline.render import make_pad_image
+from tests.pipeline.bench_support import PHOTOS, needs_photos
 
-PHOTOS = Path(__file__).resolve().parents[2].parent / "shared" / "photos"
 TRUTH = [
     [[210, 110], [470, 130], [520, 380], [150, 350]],
     [[100, 200], [400, 150], [600, 300], [50, 450]],
@@ -74,7 +73,7 @@ def test_a_photo_without_an_h_gets_the_middle_as_a_guess():
     assert order_corners(outline.quad).tolist() == outline.quad.tolist()
 
 
-@pytest.mark.skipif(not (PHOTOS / "manifest.json").is_file(), reason="../shared/photos is absent")
+@needs_photos
 def test_a_real_round_pad_photographed_at_an_angle_gives_a_reference():
     manifest = json.loads((PHOTOS / "manifest.json").read_text())
     item = next(i for i in manifest["items"] if i["file"].endswith("acbchiella_frame-0080.jpg"))
