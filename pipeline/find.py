@@ -95,7 +95,7 @@ class Tally:
     # (evidence, frame box) of the small marks refused in a view that was not enlarged
     small_refused: list[tuple[float, np.ndarray]] = field(default_factory=list)
 
-    def reason(self, polarity: str = "bright") -> str:
+    def reason(self, polarity: str) -> str:
         """Why no pad was found; ``polarity``: the reference's (the shapes looked at
         are of the H's shade, "bright" or "dark")."""
         if not self.shapes:
