@@ -11,7 +11,8 @@ from pipeline.bench.frames import DEGRADE_LEVELS
 from pipeline.preprocess import DEFAULT_METHOD, METHODS
 
 SWEEPS = ("altitude", "snr", "tilt")
-RESOLUTIONS = ("640x480", "1280x720")
+RESOLUTIONS = ("640x480", "1280x720", "1920x1080")
+SWEPT_RESOLUTIONS = RESOLUTIONS[:2]  # the altitude sweep's without --resolution
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -25,7 +26,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--degrade", choices=DEGRADE_LEVELS, default="today")
     parser.add_argument("--sweep", choices=SWEEPS)
     parser.add_argument(
-        "--resolution", choices=RESOLUTIONS, help="sweep resolution (altitude: both by default)"
+        "--resolution",
+        choices=RESOLUTIONS,
+        help="sweep resolution (altitude: 640x480 and 1280x720 by default)",
     )
     parser.add_argument("--plot", metavar="DIR", help="write the sweep's PNG plots here")
     parser.add_argument("--report", metavar="DIR", help="the dissertation's experiments")
@@ -99,7 +102,7 @@ def _dispatch(args: argparse.Namespace, methods: list[str]) -> dict:
         if args.resolution:
             resolutions = [args.resolution]
         else:
-            resolutions = list(RESOLUTIONS) if args.sweep == "altitude" else [RESOLUTIONS[0]]
+            resolutions = list(SWEPT_RESOLUTIONS) if args.sweep == "altitude" else [RESOLUTIONS[0]]
         return run_sweep(
             args.sweep,
             resolutions=[tuple(int(v) for v in r.split("x")) for r in resolutions],

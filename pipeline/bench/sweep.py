@@ -9,7 +9,8 @@ against the truth, and milliseconds per frame; the frames go to each detector at
 their native resolution (60 degree HFOV).
 
 - ``altitude``: 1 m to the altitude where the pad spans 12 px (for the 0.55 m pad:
-  ~25 m at 640x480, ~51 m at 1280x720; other pads scaled with their size), and
+  ~25 m at 640x480, ~51 m at 1280x720, ~76 m at 1920x1080; other pads scaled with
+  their size), and
   ``range90_m`` per detector: the highest altitude up to which every point has
   >= 90 % detection;
 - ``snr``: 5-40 dB at the bench's altitudes (1-6 m for the 0.55 m pad);

@@ -76,6 +76,8 @@ def test_altitude_points_reach_twelve_pixels() -> None:
     assert all(b > a for a, b in itertools.pairwise(pts))
     hd = altitude_points(DESIGNS["default"], Camera.from_fov(1280, 720, 60.0))
     assert hd[-1] == pytest.approx(2 * pts[-1], abs=2e-3)
+    full_hd = altitude_points(DESIGNS["default"], Camera.from_fov(1920, 1080, 60.0))
+    assert full_hd[-1] == pytest.approx(3 * pts[-1], abs=3e-3)
     assert range90([1, 2, 3], [0.5, 1.0, 1.0]) is None
 
 
@@ -100,6 +102,15 @@ def test_sweep_cli_snr(capsys) -> None:
     out = json.loads(capsys.readouterr().out)
     xs = [p["snr_db"] for p in out["resolutions"]["640x480"]["points"]]
     assert xs[0] == 5.0 and xs[-1] == 40.0
+
+
+def test_sweep_cli_at_1920x1080(capsys) -> None:
+    """A 1080p camera's frames are swept at their own size (by --resolution only)."""
+    assert main(["--sweep", "tilt", "--frames", "1", "--resolution", "1920x1080"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert list(out["resolutions"]) == ["1920x1080"]
+    near = out["resolutions"]["1920x1080"]["points"][0]
+    assert near["tilt_deg"] == 0.0 and near["visland"]["detection_rate"] == 1.0
 
 
 def test_cli_rejects_bad_input(capsys) -> None:
