@@ -175,6 +175,7 @@ def search(
     to_frame: np.ndarray,
     tracking: bool = False,
     enlarged: float = 1.0,
+    first_look: bool = False,
 ) -> tuple[Binarized, list[Region], Iterator[Located]]:
     """The view's binarized channel, its regions of the H's polarity, and the pad's
     H's it holds, best shape first, found as they are asked for (the caller stops
@@ -188,6 +189,8 @@ def search(
     reference picture, there to turn down look-alikes at first sight, are
     skipped. ``enlarged``: how many view pixels a frame pixel became (an
     interpolated view holds no more detail: an H's size counts in the frame's pixels).
+    ``first_look``: a coarse view searched before the working view, which judges
+    again whatever this one turns down (its marks' detail may have merged away).
     """
     projection = reference.projection
     dark = projection.is_gray and projection.polarity == "dark"
@@ -198,7 +201,7 @@ def search(
     tally.shapes += len(found)
     stages.lap("contours")
     return binary, found, _hits(found, image, binary, reference, camera, verifier, tally,
-                                stages, to_frame, tracking, enlarged)  # fmt: skip
+                                stages, to_frame, tracking, enlarged, first_look)  # fmt: skip
 
 
 def _hits(
@@ -213,7 +216,10 @@ def _hits(
     to_frame: np.ndarray,
     tracking: bool,
     enlarged: float,
+    first_look: bool,
 ) -> Iterator[Located]:
+    # (what a first look turns down is not recorded: the working view judges it again)
+    tally = Tally() if first_look else tally
     for cand in candidates(found, reference, MAX_LOCATED):
         contour = cand.region.contour
         box = apply_h(to_frame, np.array([contour.min(axis=0), contour.max(axis=0)])).ravel()

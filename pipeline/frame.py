@@ -5,7 +5,9 @@ first the H's sides where the pad's motion between the last two frames takes
 them, then where they were (followed: fitted to the edges nearby, which is all a
 pad moved by a few pixels needs); then a window around where the pad was, at a
 resolution where the H spans about ``TRACK_SPAN_PX``; when that finds
-nothing, the whole frame at a working width of ``SEARCH_WIDTH_PX``, and last
+nothing, the whole frame at ``COARSE_WIDTH_PX`` (a near pad's H, large enough
+there, its sides then fitted again at the frame's own resolution), then at a
+working width of ``SEARCH_WIDTH_PX``, and last
 enlarged toward ``FAR_SEARCH_WIDTH_PX`` (a far pad is too small at the working
 width, and its H's legs of 2 px lose their shape at the frame's own resolution: a
 640 or a 1280 px frame doubled, 1920 px by a third). Whatever finds the H
@@ -53,6 +55,7 @@ from pipeline.view import MAX_ENLARGEMENT, View, enlargement
 # Tried in turn when the default threshold finds nothing: thresholds that hold across
 # shadows (see `pipeline.preprocess`).
 FALLBACK_METHODS = ("shadow", "tophat")
+COARSE_WIDTH_PX = 320  # a first look at the whole frame, this wide (a near pad's H is large)
 TRACK_SPAN_PX = 100.0  # a tracked H is looked for at a scale where it spans about this
 FAR_SEARCH_WIDTH_PX = 2560  # the last search: narrower frames enlarged toward it (view.py)
 TRACK_REACH = 0.5  # the tracking window: the pad's last box grown by this much of its size
@@ -151,9 +154,15 @@ def process_frame(
             return _detected(
                 measured, reference, outline, yaw_hint, "follow", mask, stages, t_start, prior
             )
-    # Then searched for: around the last detection, then the whole frame, then the
-    # whole frame again with the thresholds that hold across shadows.
+    # Then searched for: around the last detection, then the whole frame (coarsely
+    # first), then the whole frame again with the thresholds that hold across shadows.
     tries = [("track", _tracking_view(prior, reference, image.shape), method)]
+    # A near pad is found on a quarter of the working view's pixels as well, and
+    # measured at the frame's own resolution all the same; what that first look
+    # misses or turns down is looked at again on the working view.
+    coarse = View.whole(image.shape, COARSE_WIDTH_PX)
+    if coarse.scale < search_view.scale:
+        tries.append(("search", coarse, method))
     tries.append(("search", search_view, method))
     if method == DEFAULT_METHOD:
         tries += [("search", search_view, fallback) for fallback in FALLBACK_METHODS]
@@ -185,19 +194,19 @@ def process_frame(
             to_frame=to_frame,
             tracking=way == "track",
             enlarged=max(1.0, view.scale),
+            first_look=view is coarse,
         )
         mask = functools.partial(_mask_for, binary.mask, view, search_view)
         if view is far:
             far_found = (binary, shapes)
         for hit in hits:
-            measured = measure(
-                image,
-                reference,
-                cam,
-                to_frame @ hit.fit.H,
-                gravity=gravity,
-                found=(view, binary.smooth),
-            )
+            H_found, found = to_frame @ hit.fit.H, (view, binary.smooth)
+            if view is coarse:
+                fine = _fitted_finely(image, reference, H_found, coarse.scale)
+                if fine is None:
+                    continue
+                H_found, found = fine
+            measured = measure(image, reference, cam, H_found, gravity=gravity, found=found)
             stages.lap("pose")
             if measured is None:  # no pose of the pad lying level fits it (from this start)
                 continue
@@ -206,7 +215,13 @@ def process_frame(
             # bench's degraded negatives, faint H's in carpet noise and a printed
             # marker's squares posed on 0-17 % of them; the bench's faint H's posed
             # within 7 % of the altitude, on 30 % and more).
-            if hit.evidence < MIN_EVIDENCE and measured.support < MIN_BOARD_SUPPORT:
+            # So must an H found on the coarse view: there its strokes' defects (a
+            # look-alike's broken leg) may have merged away (on the design bench,
+            # serif_octagon's look-alikes of 35-40 px, turned down on the working
+            # view, posed on 5-7 % of the pad's edges, in 2 of 100 empty frames; its
+            # pads on 35 % and more).
+            faint = hit.evidence < MIN_EVIDENCE or view is coarse
+            if faint and measured.support < MIN_BOARD_SUPPORT:
                 continue
             contour = apply_h(to_frame, hit.candidate.region.contour.astype(np.float64))
             return _detected(
@@ -388,6 +403,27 @@ def _window(image: np.ndarray, H: np.ndarray, reference: Reference, scale: float
     span = span_of(was)
     box = np.concatenate([was.min(axis=0), was.max(axis=0)])
     return View.around(box, image.shape, 0.1 * span + FOLLOW_REACH_PX / min(scale, 1.0), scale)
+
+
+def _fitted_finely(
+    image: np.ndarray, reference: Reference, H: np.ndarray, found_scale: float
+) -> tuple[np.ndarray, tuple[View, np.ndarray]] | None:
+    """An H found on a coarse view (``found_scale``), its sides fitted again at the
+    measurement's scale, as the working view's H's are found: its homography (frame
+    pixels) and the window with its smoothed channel, or None when they are not found
+    there. (Measured from the coarse corners, which are a frame pixel or two off,
+    the real-world mix's poses came up to a tenth worse.)"""
+    span = _pad_span_px(H, reference)
+    view = _window(image, H, reference, MEASURE_SPAN_PX / span) if span >= 1.0 else None
+    if view is None:
+        return None
+    levels = smooth_channel(view.image(image), reference.projection)
+    # (a coarse pixel's error, in the window's pixels)
+    reach = max(2.5, 1.5 * view.scale / found_scale)
+    fitted = fit_h_sides(levels, reference, view.matrix @ H, search_px=reach)
+    if fitted is None:
+        return None
+    return view.to_frame @ fitted[0].H, (view, levels)
 
 
 def _fit_near(
