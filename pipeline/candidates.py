@@ -28,6 +28,7 @@ from pipeline.shapes import Region, css_polygon, douglas_peucker, upsampled_cont
 
 MIN_H_AREA_PX = 24.0  # smaller regions carry too few pixels for an H
 MIN_H_SPAN_PX = 8.0  # an H narrower than this is not looked for (see find.SMALL_H_PX)
+MAX_SPAN_GROWTH = 3.0  # a fit spanning this many times its region is not that region's H
 MIN_SHAPE_IOU = 0.4  # whitened overlap with the reference's H (look-alikes rank below)
 MAX_SHAPE_RESIDUAL = 0.1  # CSS corners: homography RMS / sqrt(area) (real H < 0.05)
 HOPELESS_AFFINE = 3.0  # an affine fit this many times worse: no homography is tried
@@ -145,7 +146,8 @@ def locate(cand: Candidate, binary: Binarized, reference: Reference) -> Located 
         fit, unlike = fitted
         deform = reference.h_deformation
         corners = apply_h(fit.H, deform.corners(reference.corners_m, fit.shape))
-        if span_of(corners) < MIN_H_SPAN_PX:
+        # (a fit run away to a homography near singular spans thousands of pixels)
+        if not MIN_H_SPAN_PX <= span_of(corners) <= MAX_SPAN_GROWTH * max(cand.region.span, 1.0):
             continue
         located = Located(cand, corners, fit, name, unlike)
         if best is None or (located.evidence, -fit.rms_px) > (best.evidence, -best.fit.rms_px):

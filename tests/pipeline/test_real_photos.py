@@ -13,7 +13,7 @@ import cv2
 import pytest
 
 from pipeline import Camera, Reference, process_frame
-from pipeline.bench.photos import FOV_DEG, in_box, load_manifest, references_of
+from pipeline.bench.photos import FOV_DEG, degraded_view, in_box, load_manifest, references_of
 from tests.pipeline.bench_support import PHOTOS, needs_photos
 
 pytestmark = needs_photos
@@ -86,3 +86,20 @@ def test_a_dark_h_reference_learns_its_polarity():
     design = "dark_H_in_ring_on_white_paper"
     entry = next(e for d, e in _references(True) if d == design)
     assert _reference(entry["file"], entry["pad_size_m"]).polarity == "dark"
+
+
+def test_a_fit_run_away_on_a_degraded_negative_is_refused_not_a_crash():
+    # The photos bench's `--augment 3 --seed 4`: a negative's view #0 with the orange
+    # ring's synthetic reference. An H's sides fitted there ran away to a homography
+    # near singular (an H 437,103 px across), and the check of the board around it
+    # asked for 178 GiB.
+    items = _manifest()["items"]
+    index = next((i for i, it in enumerate(items) if "neg_109_" in it["file"]), None)
+    entries = [e for _, e in _references(True) + _references(False)]
+    entry = next((e for e in entries if e["file"] == "refs/orange_ring_synth.png"), None)
+    if index is None or entry is None:
+        pytest.skip("the photo or the reference is not in this set")
+    image, _ = degraded_view(cv2.imread(str(PHOTOS / items[index]["file"])), 4, index, 0)
+    h, w = image.shape[:2]
+    reference = _reference(entry["file"], entry["pad_size_m"])
+    assert not process_frame(image, reference, Camera.from_fov(w, h, FOV_DEG)).detected
