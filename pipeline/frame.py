@@ -196,7 +196,10 @@ def process_frame(
             enlarged=max(1.0, view.scale),
             first_look=view is coarse,
         )
-        mask = functools.partial(_mask_for, binary.mask, view, search_view)
+        if view is coarse:  # (shown: the working view's threshold, made when asked for)
+            mask = functools.partial(_working_mask, image, search_view, reference, how)
+        else:
+            mask = functools.partial(_mask_for, binary.mask, view, search_view)
         if view is far:
             far_found = (binary, shapes)
         for hit in hits:
@@ -382,6 +385,13 @@ def _follow_fine(
 
 def _threshold(channel: np.ndarray, method: str, dark: bool) -> np.ndarray:
     return binarize_channel(channel, method, dark=dark).mask
+
+
+def _working_mask(image: np.ndarray, view: View, reference: Reference, method: str) -> np.ndarray:
+    """The threshold mask of a view of the frame (the first look's is a quarter as fine)."""
+    projection = reference.projection
+    dark = projection.is_gray and projection.polarity == "dark"
+    return _threshold(to_channel(view.image(image), projection), method, dark)
 
 
 def _motion(prior: FrameResult | None, H: np.ndarray) -> np.ndarray | None:
