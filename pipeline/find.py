@@ -10,6 +10,7 @@ best shape first; the first whose pose can be measured is the pad's.
 from __future__ import annotations
 
 import functools
+import math
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -70,6 +71,10 @@ MAX_HUE = 0.3  # the board's chromaticity, L1 distance to the reference's
 # its pixels: 243-244 on the real-world mix's overexposed, shadowed views of ICAO pads.
 SATURATED_LUMA, CLIPPED_GAIN = 240.0, 1.5
 REJUDGE_BELOW_PX = 24.0  # marks smaller than this (frame pixels) are judged in every view
+# A first look (a coarse view) looks at marks at least this wide (its pixels): on the
+# altitude sweep's 640 x 480 frames at 9-16 m, the H's of 7-9 of its pixels it fitted
+# and turned down cost it 3-8 ms a frame; those of 12 px and more at 7 m, it takes.
+FIRST_LOOK_MIN_SPAN_PX = 10.0
 
 
 class CandidateVerifier(Protocol):
@@ -94,6 +99,9 @@ class Tally:
     turned_down: list[np.ndarray] = field(default_factory=list)  # frame boxes x0 y0 x1 y1
     # (evidence, frame box) of the small marks refused in a view that was not enlarged
     small_refused: list[tuple[float, np.ndarray]] = field(default_factory=list)
+    # (frame box, view scale, threshold) of every mark judged: judged again on the same
+    # pixels with the same threshold, it would be judged the same
+    seen: list[tuple[np.ndarray, float, str]] = field(default_factory=list)
 
     def reason(self, polarity: str) -> str:
         """Why no pad was found; ``polarity``: the reference's (the shapes looked at
@@ -127,6 +135,16 @@ class Tally:
         reach = max(1.5, 0.08 * size)
         return any(float(np.abs(box - b).max()) <= reach for b in self.turned_down)
 
+    def seen_alike(self, box: np.ndarray, scale: float, method: str) -> bool:
+        """Whether a mark in ``box`` was judged already on a view of the same ``scale``
+        thresholded the same way (a window enlarged around a small mark, then the
+        whole frame enlarged alike)."""
+        reach = max(1.5, 0.08 * float(max(box[2] - box[0], box[3] - box[1])))
+        return any(
+            how == method and math.isclose(at, scale) and float(np.abs(box - b).max()) <= reach
+            for b, at, how in self.seen
+        )
+
     def turn_down(self, box: np.ndarray) -> None:
         self.turned_down.append(box)
 
@@ -136,16 +154,19 @@ class Tally:
         if enlarged <= 1.0 and float(max(box[2] - box[0], box[3] - box[1])) < REJUDGE_BELOW_PX:
             self.small_refused.append((evidence, box))
 
-    def closer_looks(self, count: int) -> list[np.ndarray]:
+    def closer_looks(self, count: int, looked: list[np.ndarray] | None = None) -> list[np.ndarray]:
         """The boxes of up to ``count`` distinct small refused marks, the likeliest H's
-        (best evidence) first."""
+        (best evidence) first, none of them where a box of ``looked`` (marks looked at
+        closer already) lies; they are added to ``looked``."""
+        looked = [] if looked is None else looked
         picked: list[np.ndarray] = []
         for _, box in sorted(self.small_refused, key=lambda e: -e[0]):
             if len(picked) == count:
                 break
             reach = max(1.5, 0.25 * float(max(box[2] - box[0], box[3] - box[1])))
-            if all(float(np.abs(box - b).max()) > reach for b in picked):
+            if all(float(np.abs(box - b).max()) > reach for b in looked):
                 picked.append(box)
+                looked.append(box)
         return picked
 
 
@@ -200,8 +221,8 @@ def search(
     found = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=0.5 * area)
     tally.shapes += len(found)
     stages.lap("contours")
-    return binary, found, _hits(found, image, binary, reference, camera, verifier, tally,
-                                stages, to_frame, tracking, enlarged, first_look)  # fmt: skip
+    return binary, found, _hits(found, image, binary, reference, camera, verifier, tally, stages,
+                                to_frame, tracking, enlarged, first_look, method)  # fmt: skip
 
 
 def _hits(
@@ -217,14 +238,21 @@ def _hits(
     tracking: bool,
     enlarged: float,
     first_look: bool,
+    method: str,
 ) -> Iterator[Located]:
     # (what a first look turns down is not recorded: the working view judges it again)
     tally = Tally() if first_look else tally
+    scale = 1.0 / float(to_frame[0, 0])  # (view pixels a frame pixel)
+    if first_look:
+        # A first look is for a near pad's large H: smaller marks are judged on the
+        # working view all the same.
+        found = [r for r in found if r.span >= FIRST_LOOK_MIN_SPAN_PX]
     for cand in candidates(found, reference, MAX_LOCATED):
         contour = cand.region.contour
         box = apply_h(to_frame, np.array([contour.min(axis=0), contour.max(axis=0)])).ravel()
-        if tally.judged(box):
+        if tally.judged(box) or tally.seen_alike(box, scale, method):
             continue
+        tally.seen.append((box, scale, method))
         hit = locate(cand, binary, reference)
         stages.lap("corners")
         if hit is None:

@@ -7,10 +7,12 @@ pad moved by a few pixels needs); then a window around where the pad was, at a
 resolution where the H spans about ``TRACK_SPAN_PX``; when that finds
 nothing, the whole frame at ``COARSE_WIDTH_PX`` (a near pad's H, large enough
 there, its sides then fitted again at the frame's own resolution), then at a
-working width of ``SEARCH_WIDTH_PX``, and last
+working width of ``SEARCH_WIDTH_PX`` (with two more thresholds), and last
 enlarged toward ``FAR_SEARCH_WIDTH_PX`` (a far pad is too small at the working
 width, and its H's legs of 2 px lose their shape at the frame's own resolution: a
-640 or a 1280 px frame doubled, 1920 px by a third). Whatever finds the H
+640 or a 1280 px frame doubled, 1920 px by a third). An H located on a view but too
+small there to be judged is looked at closer first: a window around it, doubled;
+then the enlarged whole frame, before the working view's other thresholds. Whatever finds the H
 (``pipeline.find``), the pad is then measured at the frame's own resolution around
 it, or on the enlarged view that found it (``pipeline.measure``). When no H is
 found, a pad whose H is too far to be placed, or spoilt, is looked for by its board
@@ -164,19 +166,19 @@ def process_frame(
     if coarse.scale < search_view.scale:
         tries.append(("search", coarse, method))
     tries.append(("search", search_view, method))
-    if method == DEFAULT_METHOD:
-        tries += [("search", search_view, fallback) for fallback in FALLBACK_METHODS]
     # A far pad: too small at the search's width, searched at the camera's own
     # resolution before giving up (native frames buy range), enlarged: a leg of
     # 2-3 px keeps its shape and corners only interpolated (on 1280 x 720 frames,
     # the bench's sweep found 0.675 of the pads 32 m away at the frame's own
     # resolution, 0.90 doubled, at about twice the time on a frame without the pad).
     far = View.enlarged(image.shape, FAR_SEARCH_WIDTH_PX)
+    fallbacks = FALLBACK_METHODS if method == DEFAULT_METHOD else ()
+    tries += [("search", search_view, fallback) for fallback in fallbacks]
     tries.append(("search", far, method))
     far_found: tuple[Binarized, list[Region]] | None = None
     # (the whole frame is searched three ways: its picture and channel made once)
     pictures: dict[View, tuple[np.ndarray, np.ndarray]] = {}
-    for way, view, how in _with_closer_looks(tries, tally, image.shape, reference):
+    for way, view, how in _in_turn(tries, tally, image.shape, reference):
         if view is None:
             continue
         to_frame = view.to_frame
@@ -255,27 +257,49 @@ def process_frame(
     return _nothing(stages.timings, t_start, tally.reason(reference.polarity), mask)
 
 
-def _with_closer_looks(
+def _in_turn(
     tries: list[tuple[str, View | None, str]],
     tally: Tally,
     shape: tuple[int, ...],
     reference: Reference,
 ) -> Iterator[tuple[str, View | None, str]]:
-    """The tries, then on a frame too wide to be enlarged whole to ``MAX_ENLARGEMENT``
-    (over 1280 px) a window enlarged around each of the small marks they refused
-    (``MAX_CLOSER_LOOKS``): a far pad's H, a dozen pixels across with legs of 2 px,
-    keeps its shape and corners only interpolated; doubling a whole 1920 x 1080
+    """The tries in turn, with closer looks: a window enlarged around each of the
+    small marks located and refused (``MAX_CLOSER_LOOKS``, the likeliest first).
+
+    When a view of the whole frame at its own resolution or coarser refuses H's too
+    small there to be judged, a far pad's H may be among them: the windows around
+    them come next, then the finer views of the whole frame, then the working
+    view's other thresholds (each of which located and refused a far pad's H again
+    before the enlarged view found it). Last, on a frame too wide to be enlarged
+    whole to ``MAX_ENLARGEMENT`` (over 1280 px), windows around the small marks the
+    other views refused: a far pad's H, a dozen pixels across with legs of 2 px,
+    keeps its shape and corners only interpolated, and doubling a whole 1920 x 1080
     frame would cost four times its pixels on every frame without the pad."""
-    yield from tries
-    if enlargement(shape, FAR_SEARCH_WIDTH_PX) >= MAX_ENLARGEMENT:
-        return  # (enlarged whole already)
-    # The pad around its H, with room for its board: the H's box grown by the pad's
-    # size over the H's.
-    for box in tally.closer_looks(MAX_CLOSER_LOOKS):
+    looked: list[np.ndarray] = []
+    pending = list(tries)
+    while pending:
+        way, view, how = pending.pop(0)
+        yield way, view, how
+        if way != "search" or view is None or view.scale > 1.0 or not tally.small_refused:
+            continue
+        yield from _closer_looks(tally, shape, reference, how, looked)
+        finer = [t for t in pending if t[1] is not None and t[1].scale > view.scale]
+        pending = finer + [t for t in pending if t not in finer]
+    if enlargement(shape, FAR_SEARCH_WIDTH_PX) < MAX_ENLARGEMENT:
+        yield from _closer_looks(tally, shape, reference, DEFAULT_METHOD, looked)
+
+
+def _closer_looks(
+    tally: Tally, shape: tuple[int, ...], reference: Reference, how: str, looked: list[np.ndarray]
+) -> Iterator[tuple[str, View | None, str]]:
+    """Windows enlarged to ``MAX_ENLARGEMENT`` around the small marks refused so far
+    (not those in ``looked``, to which they are added), with room for their pad's
+    board: the H's box grown by the pad's size over the H's."""
+    for box in tally.closer_looks(MAX_CLOSER_LOOKS, looked):
         size = float(max(box[2] - box[0], box[3] - box[1]))
         grow = 0.5 * reference.pad_over_h * size + 4.0
         view = View.around(box, shape, grow, MAX_ENLARGEMENT, max_scale=MAX_ENLARGEMENT)
-        yield "search", view, DEFAULT_METHOD
+        yield "search", view, how
 
 
 def _detected(
