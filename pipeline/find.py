@@ -252,7 +252,8 @@ def _hits(
         box = apply_h(to_frame, np.array([contour.min(axis=0), contour.max(axis=0)])).ravel()
         if tally.judged(box) or tally.seen_alike(box, scale, method):
             continue
-        tally.seen.append((box, scale, method))
+        if not tracking:  # (a tracking window's checks are fewer)
+            tally.seen.append((box, scale, method))
         hit = locate(cand, binary, reference)
         stages.lap("corners")
         if hit is None:

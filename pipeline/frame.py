@@ -11,13 +11,14 @@ working width of ``SEARCH_WIDTH_PX`` (with two more thresholds), and last
 enlarged toward ``FAR_SEARCH_WIDTH_PX`` (a far pad is too small at the working
 width, and its H's legs of 2 px lose their shape at the frame's own resolution: a
 640 or a 1280 px frame doubled, 1920 px by a third). An H located on a view but too
-small there to be judged is looked at closer first: a window around it, doubled;
-then the enlarged whole frame, before the working view's other thresholds. Whatever finds the H
-(``pipeline.find``), the pad is then measured at the frame's own resolution around
-it, or on the enlarged view that found it (``pipeline.measure``). When no H is
-found, a pad whose H is too far to be placed, or spoilt, is looked for by its board
-(``pipeline.board_search``) on the finest view. The result says which way found
-it (``found_by``: "follow", "track", "search" or "board").
+small there to be judged is looked at closer at once: a window around it, doubled,
+then the enlarged whole frame, before the working view's other thresholds.
+Whatever finds the H (``pipeline.find``), the pad is then measured at the frame's
+own resolution around it, or on the enlarged view that found it
+(``pipeline.measure``). When no H is found, a pad whose H is too far to be placed,
+or spoilt, is looked for by its board (``pipeline.board_search``) on the finest
+view. The result says which way found it (``found_by``: "follow", "track",
+"search" or "board").
 """
 
 from __future__ import annotations
@@ -166,14 +167,14 @@ def process_frame(
     if coarse.scale < search_view.scale:
         tries.append(("search", coarse, method))
     tries.append(("search", search_view, method))
+    if method == DEFAULT_METHOD:
+        tries += [("search", search_view, fallback) for fallback in FALLBACK_METHODS]
     # A far pad: too small at the search's width, searched at the camera's own
     # resolution before giving up (native frames buy range), enlarged: a leg of
     # 2-3 px keeps its shape and corners only interpolated (on 1280 x 720 frames,
     # the bench's sweep found 0.675 of the pads 32 m away at the frame's own
     # resolution, 0.90 doubled, at about twice the time on a frame without the pad).
     far = View.enlarged(image.shape, FAR_SEARCH_WIDTH_PX)
-    fallbacks = FALLBACK_METHODS if method == DEFAULT_METHOD else ()
-    tries += [("search", search_view, fallback) for fallback in fallbacks]
     tries.append(("search", far, method))
     far_found: tuple[Binarized, list[Region]] | None = None
     # (the whole frame is searched three ways: its picture and channel made once)
