@@ -61,16 +61,20 @@ def test_a_far_pads_small_h_refused_on_the_working_view_is_looked_at_closer_next
         assert [t for t in log if t[0] >= COARSE_WIDTH_PX] == [*whole, ENLARGED], log
 
 
-def test_a_small_h_refused_on_a_shadow_threshold_is_looked_at_closer_on_it(monkeypatch):
-    # The sweep's frame 6 at 18 m (point 13): the H is located only by the top-hat
-    # threshold, refused there as too small, and found in a window enlarged around it
-    # on that threshold: the whole frame is not doubled.
+def test_a_small_h_refused_on_a_shadow_threshold_is_looked_at_closer_as_if_doubled(monkeypatch):
+    # The sweep's frames 6 and 30 at 18 m (point 13): the H is located only by the
+    # top-hat threshold and refused there as too small; a window doubled around it
+    # and thresholded as the doubled frame is finds it (thresholded top-hat, it was
+    # refused again): the whole frame is not doubled.
     log = _searched(monkeypatch)
-    pad, _, view, hint, reference = sweep_frames("default", CAM, 13, 18.0, 6)
-    res = process_frame(pad, reference, CAM, gravity_hint=hint)
-    assert res.detected and res.pose is not None, res.reason
-    assert ENLARGED not in log and log[-1][0] < 200 and log[-1][1] == "tophat", log
-    assert _position_error(res, view) < 0.05 * 18.0
+    for j in (6, 30):
+        pad, _, view, hint, reference = sweep_frames("default", CAM, 13, 18.0, j)
+        log.clear()
+        res = process_frame(pad, reference, CAM, gravity_hint=hint)
+        assert res.detected and res.pose is not None, res.reason
+        assert log[-2:-1] == [(640, "tophat")], log
+        assert log[-1][0] < 200 and log[-1][1] == "adaptive", log  # a window
+        assert _position_error(res, view) < 0.05 * 18.0
 
 
 def test_without_a_small_h_refused_the_shadow_thresholds_come_before_the_enlarged_view(
