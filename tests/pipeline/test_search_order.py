@@ -39,6 +39,18 @@ def _position_error(res, view) -> float:
     )
 
 
+def _found(log: list[tuple[int, str]], point: int, altitude: float, j: int):
+    """The altitude sweep's frame ``j`` of ``point`` (640 x 480), its pad found within
+    5 % of the altitude with ``log`` holding the views searched; its empty twin, the
+    attitude hint and the reference."""
+    pad, empty, view, hint, reference = sweep_frames("default", CAM, point, altitude, j)
+    log.clear()
+    res = process_frame(pad, reference, CAM, gravity_hint=hint)
+    assert res.detected and res.pose is not None, res.reason
+    assert _position_error(res, view) < 0.05 * altitude
+    return empty, hint, reference
+
+
 def test_a_far_pads_small_h_refused_on_the_working_view_is_looked_at_closer_next(monkeypatch):
     # The altitude sweep's 640 x 480 frames at 16 m (point 12), frames 20 and 28: the
     # H (about 10 px) is located on the working view and refused there as too small;
@@ -46,13 +58,9 @@ def test_a_far_pads_small_h_refused_on_the_working_view_is_looked_at_closer_next
     # doubled, before it was found.
     log = _searched(monkeypatch)
     for j in (20, 28):
-        pad, empty, view, hint, reference = sweep_frames("default", CAM, 12, 16.0, j)
-        log.clear()
-        res = process_frame(pad, reference, CAM, gravity_hint=hint)
-        assert res.detected and res.pose is not None, res.reason
+        empty, hint, reference = _found(log, 12, 16.0, j)
         assert log[:2] == [(COARSE_WIDTH_PX, "adaptive"), ADAPTIVE_640], log
         assert len(log) == 3 and log[2][0] < 200 and log[2][1] == "adaptive", log  # a window
-        assert _position_error(res, view) < 0.05 * 16.0
         # Without the pad, every view of the whole frame is still searched: nothing
         # found is no reason to skip a threshold.
         log.clear()
@@ -68,13 +76,9 @@ def test_a_small_h_refused_on_a_shadow_threshold_is_looked_at_closer_as_if_doubl
     # refused again): the whole frame is not doubled.
     log = _searched(monkeypatch)
     for j in (6, 30):
-        pad, _, view, hint, reference = sweep_frames("default", CAM, 13, 18.0, j)
-        log.clear()
-        res = process_frame(pad, reference, CAM, gravity_hint=hint)
-        assert res.detected and res.pose is not None, res.reason
+        _found(log, 13, 18.0, j)
         assert log[-2:-1] == [(640, "tophat")], log
         assert log[-1][0] < 200 and log[-1][1] == "adaptive", log  # a window
-        assert _position_error(res, view) < 0.05 * 18.0
 
 
 def test_without_a_small_h_refused_the_shadow_thresholds_come_before_the_enlarged_view(
