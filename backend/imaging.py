@@ -6,6 +6,7 @@ import cv2
 import numpy as np
 
 from backend.image_header import BadHeader, ImageHeader, read_header
+from pipeline.picture import decode_picture
 
 
 class UnsupportedImage(ValueError):
@@ -36,7 +37,8 @@ def sniff_image(data: bytes) -> str | None:
 
 
 def decode_image(data: bytes, *, max_pixels: int = DEFAULT_MAX_PIXELS) -> np.ndarray:
-    """Decode an uploaded picture to BGR.
+    """Decode an uploaded picture to BGR (a transparent ground laid on the shade its
+    pad contrasts with: `pipeline.picture.on_ground`).
 
     The size is read from the header first (:func:`backend.image_header.read_header`):
     over ``max_pixels`` raises :class:`TooManyPixels` without decoding anything, so a
@@ -50,10 +52,7 @@ def decode_image(data: bytes, *, max_pixels: int = DEFAULT_MAX_PIXELS) -> np.nda
     if header.decode_pixels > max_pixels:
         raise TooManyPixels(_over_budget(header, max_pixels))
     name = header.format.upper()
-    try:
-        image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
-    except cv2.error:
-        image = None
+    image = decode_picture(data)
     if image is None or image.size == 0:
         raise UnsupportedImage(f"The file looks like {name} but cannot be decoded.")
     if image.shape[0] * image.shape[1] != header.pixels:

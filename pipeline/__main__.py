@@ -16,6 +16,7 @@ import numpy as np
 
 from pipeline import Camera, Reference, process_frame
 from pipeline.draw import annotate
+from pipeline.picture import read_picture
 from pipeline.preprocess import DEFAULT_METHOD, METHODS
 
 
@@ -46,16 +47,9 @@ def _camera_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--method", choices=METHODS, default=DEFAULT_METHOD, help="thresholding")
 
 
-def _read(path: Path) -> np.ndarray:
-    image = cv2.imread(str(path), cv2.IMREAD_COLOR)
-    if image is None:
-        raise ValueError(f"cannot read {path} as a picture")
-    return image
-
-
 def _analyze(args: argparse.Namespace) -> int:
-    frame = _read(args.frame)
-    reference = Reference.from_image(_read(args.reference), args.pad_size)
+    frame = read_picture(args.frame)
+    reference = Reference.from_image(read_picture(args.reference), args.pad_size)
     h, w = frame.shape[:2]
     camera = (
         Camera.from_file(args.calibration) if args.calibration else Camera.from_fov(w, h, args.hfov)

@@ -43,6 +43,7 @@ import cv2
 import numpy as np
 
 from pipeline.colour import GRAY, Projection
+from pipeline.picture import on_ground
 
 METHODS = ("adaptive", "otsu", "seed", "shadow", "tophat")
 DEFAULT_METHOD = "adaptive"
@@ -56,7 +57,9 @@ TOPHAT_SIDE_PX, TOPHAT_RISE = 41, 16
 
 
 def check_image(image: object, name: str = "image_bgr") -> np.ndarray:
-    """Return ``image`` as a BGR uint8 array, or raise ValueError naming ``name``."""
+    """Return ``image`` as a BGR uint8 array (from BGR, gray, or BGRA laid on the
+    ground its rim contrasts with: `pipeline.picture.on_ground`), or raise ValueError
+    naming ``name``."""
     if image is None:
         raise ValueError(f"{name} is None; expected an H x W x 3 uint8 BGR image")
     if not isinstance(image, np.ndarray):
@@ -66,9 +69,11 @@ def check_image(image: object, name: str = "image_bgr") -> np.ndarray:
     if image.ndim == 2:
         image = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
     elif image.ndim == 3 and image.shape[2] == 4:
-        image = cv2.cvtColor(image, cv2.COLOR_BGRA2BGR)
+        image = on_ground(image)  # (what lies under transparent pixels is no colour)
     elif not (image.ndim == 3 and image.shape[2] == 3):
-        raise ValueError(f"{name} must be H x W x 3 (BGR) or H x W, got shape {image.shape}")
+        raise ValueError(
+            f"{name} must be H x W x 3 (BGR), H x W x 4 (BGRA) or H x W, got shape {image.shape}"
+        )
     if image.shape[0] < 16 or image.shape[1] < 16:
         raise ValueError(f"{name} is too small ({image.shape[1]}x{image.shape[0]}); need >= 16x16")
     return image

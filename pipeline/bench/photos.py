@@ -31,6 +31,7 @@ import numpy as np
 from pipeline import Camera, Reference, process_frame
 from pipeline.bench.tally import stats
 from pipeline.cores import use_one_core
+from pipeline.picture import read_picture
 
 FOV_DEG = 70.0  # the photos' cameras are unknown; the corners do not depend on it
 SCALE = (0.6, 1.5)
@@ -172,10 +173,10 @@ def carried_box(box: list[float], T: np.ndarray) -> tuple[float, float, float, f
 
 
 def _read(root: Path, file: str) -> np.ndarray:
-    image = cv2.imread(str(root / file), cv2.IMREAD_COLOR)
-    if image is None:
-        raise ValueError(f"photos: cannot read {root / file}")
-    return image
+    try:
+        return read_picture(root / file)
+    except ValueError as exc:
+        raise ValueError(f"photos: {exc}") from None
 
 
 class _Score:

@@ -281,6 +281,17 @@ def test_upload_list_activate_and_pictures(client):
     assert active_id(client) == default_id
 
 
+def test_a_pad_on_a_transparent_ground_is_taken(client):
+    # A black H on a transparent ground stored as black (as many pictures from the web
+    # are): read as colour alone, a black picture with no pad.
+    icon = np.zeros((400, 400, 4), np.uint8)
+    for x0, y0, x1, y1 in ((80, 80, 143, 319), (256, 80, 319, 319), (80, 172, 319, 227)):
+        icon[y0 : y1 + 1, x0 : x1 + 1] = (20, 20, 20, 255)
+    r = upload(client, png(icon), name="icon.png")
+    assert r.status_code == 201, r.text
+    assert r.json()["active"] and len(r.json()["corners_m"]) == 12
+
+
 def test_oversized_upload_is_413_and_nothing_changes(client):
     before = active_id(client)
     big = b"\x89PNG\r\n\x1a\n" + np.random.default_rng(0).bytes(1_200_000)
