@@ -78,6 +78,8 @@ def refine_polygon(
     # Sides too short to measure keep the line through their two corners.
     margin = np.maximum(inset * length, np.minimum(2.0, 0.3 * length))
     measurable = length - 2 * margin >= 3.0
+    if np.count_nonzero(measurable) < 2:
+        return None  # (too few sides to place a corner by; none at all to sample)
     lo = np.where(measurable, margin, 0.0)
     hi = np.where(measurable, length - margin, 0.0)
     counts = np.where(measurable, np.clip(hi - lo, 3, 80), 0).astype(int)

@@ -53,3 +53,10 @@ def test_returns_none_where_there_is_no_edge():
 def test_rejects_degenerate_input():
     with pytest.raises(ValueError, match="corners"):
         refine_polygon(np.zeros((10, 10), np.uint8), np.zeros((2, 2)))
+
+
+def test_a_polygon_whose_sides_are_too_short_to_measure_is_not_refined():
+    # (a small reference picture's mark of a few pixels: nothing to sample, no error)
+    tiny = np.array([[10.0, 10.0], [13.0, 10.0], [13.0, 13.0], [10.0, 13.0]])
+    img = cv2.GaussianBlur(_draw(tiny, size=30), (3, 3), 0.8)
+    assert refine_polygon(img, tiny) is None
