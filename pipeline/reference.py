@@ -34,6 +34,7 @@ _WORK_MAX = 1024  # pictures are measured at up to this many pixels a side
 _LEVELS = 9  # thresholds tried per channel between its 2nd and 98th percentiles
 _MIN_H_AREA = 0.002  # of the picture: smaller marks are text or noise, not the pad's H
 _MAX_H_AREA = 0.6
+_MAX_CUT_SHAPES = 32  # shapes cut by the picture's edge kept to tell of a cut H
 _MIN_CONTRAST = 25.0  # H against its board on the learned channel, 0..255
 # The picture's border is its board's edge when its levels spread this little (of the
 # contrast): 0.01-0.02 on square boards and sheets, 0.09-0.35 on discs and paint on grass.
@@ -330,6 +331,7 @@ def _find_h(work: np.ndarray) -> tuple[HFit, np.ndarray] | str:
     best: tuple[float, float, HFit, np.ndarray] | None = None
     shapes = 0
     seen: set[tuple[int, int, int, int]] = set()
+    cut: dict[tuple[int, int, int, int], np.ndarray] = {}  # shapes the picture's edge cuts
     for _name, chan in _channels(work):
         lo, hi = np.percentile(chan, [2, 98])
         if hi - lo < _MIN_CONTRAST:
@@ -341,19 +343,20 @@ def _find_h(work: np.ndarray) -> tuple[HFit, np.ndarray] | str:
                 x, y, w, h, a = stats[k]
                 if not _MIN_H_AREA * area <= a <= _MAX_H_AREA * area:
                     continue
-                if x == 0 or y == 0 or x + w == ww or y + h == wh:
-                    continue  # the H lies inside the picture
                 if a > 0.95 * w * h:
                     continue  # a filled box
                 key = (x // 4, y // 4, w // 4, h // 4)
+                if x == 0 or y == 0 or x + w == ww or y + h == wh:
+                    # The H lies inside the picture; one the edge cuts is told of.
+                    if key not in cut and len(cut) < _MAX_CUT_SHAPES:
+                        cut[key] = labels[y : y + h, x : x + w] == k
+                    continue
                 if key in seen:
                     continue  # the same shape at another threshold or in another channel
                 seen.add(key)
                 shapes += 1
                 region = labels[y : y + h, x : x + w] == k
-                crop = np.zeros((h + 4, w + 4), np.uint8)
-                crop[2:-2, 2:-2] = region
-                fit = fit_h(crop)
+                fit = fit_h(_framed(region))
                 if fit is None:
                     continue
                 fit = HFit(
@@ -373,6 +376,11 @@ def _find_h(work: np.ndarray) -> tuple[HFit, np.ndarray] | str:
                     full[y : y + h, x : x + w] = region
                     best = (score, fit.iou, fit, full)
     if best is None:
+        if any(fit_h(_framed(region)) is not None for region in cut.values()):
+            return (
+                "the H touches the picture's edge: crop the picture to the pad's outer "
+                "edge, with the whole H inside it"
+            )
         if shapes == 0:
             return (
                 "no shape stands out on the picture: expected a pad whose H contrasts "
@@ -383,6 +391,13 @@ def _find_h(work: np.ndarray) -> tuple[HFit, np.ndarray] | str:
             "channels, none has the two legs and crossbar of an H"
         )
     return best[2], best[3]
+
+
+def _framed(region: np.ndarray) -> np.ndarray:
+    """A region's box (bool) with 2 px of ground around it, as `fit_h` takes it."""
+    crop = np.zeros((region.shape[0] + 4, region.shape[1] + 4), np.uint8)
+    crop[2:-2, 2:-2] = region
+    return crop
 
 
 def _refit(mask: np.ndarray, region: np.ndarray, fit: HFit) -> HFit:

@@ -96,6 +96,15 @@ def test_pictures_without_an_h_are_refused(picture, message):
         Reference.from_image(picture, 0.55)
 
 
+def test_a_picture_cropped_into_its_h_says_so():
+    pad = make_pad_image(600)
+    half = int(np.abs(PadGeometry().h_corners_m[:, 1]).max() * 600 / 0.55)  # (the H's, px)
+    cropped = pad[300 - half + 10 : 300 + half - 10]  # the legs' ends cut off
+    with pytest.raises(ValueError, match="the H touches the picture's edge"):
+        Reference.from_image(cropped, 0.55)
+    Reference.from_image(pad[300 - half - 20 : 300 + half + 20], 0.55)  # (the whole H: taken)
+
+
 @pytest.mark.parametrize("kind", ["rectangle", "II", "letter", "cross", "h_no_bar"])
 def test_lookalikes_are_not_taken_for_an_h(kind):
     mask = make_lookalike(kind, 300, np.random.default_rng(3))
