@@ -394,7 +394,8 @@ def _find_h(work: np.ndarray) -> tuple[HFit, np.ndarray] | str:
 
 
 def _framed(region: np.ndarray) -> np.ndarray:
-    """A region's box (bool) with 2 px of ground around it, as `fit_h` takes it."""
+    """A region (bool, its box) with 2 px of ground around it: the uint8 0/1 mask `fit_h`
+    takes."""
     crop = np.zeros((region.shape[0] + 4, region.shape[1] + 4), np.uint8)
     crop[2:-2, 2:-2] = region
     return crop
