@@ -129,21 +129,16 @@ class Tally:
         on another threshold's mask or a finer view: its fit and checks work on the
         frame's levels, not on the mask. Smaller marks are judged again (a finer
         view is what they need)."""
-        size = float(max(box[2] - box[0], box[3] - box[1]))
-        if size < REJUDGE_BELOW_PX:
+        if _size(box) < REJUDGE_BELOW_PX:
             return False
-        reach = max(1.5, 0.08 * size)
-        return any(float(np.abs(box - b).max()) <= reach for b in self.turned_down)
+        return _near_any(box, self.turned_down, 0.08)
 
     def seen_alike(self, box: np.ndarray, scale: float, method: str) -> bool:
         """Whether a mark in ``box`` was judged already on a view of the same ``scale``
         thresholded the same way (a window enlarged around a small mark, then the
         whole frame enlarged alike)."""
-        reach = max(1.5, 0.08 * float(max(box[2] - box[0], box[3] - box[1])))
-        return any(
-            how == method and math.isclose(at, scale) and float(np.abs(box - b).max()) <= reach
-            for b, at, how in self.seen
-        )
+        alike = [b for b, at, how in self.seen if how == method and math.isclose(at, scale)]
+        return _near_any(box, alike, 0.08)
 
     def turn_down(self, box: np.ndarray) -> None:
         self.turned_down.append(box)
@@ -151,7 +146,7 @@ class Tally:
     def refused(self, box: np.ndarray, evidence: float, enlarged: float) -> None:
         """A located mark refused: kept for a closer look when it was small and seen
         at the frame's own resolution or coarser."""
-        if enlarged <= 1.0 and float(max(box[2] - box[0], box[3] - box[1])) < REJUDGE_BELOW_PX:
+        if enlarged <= 1.0 and _size(box) < REJUDGE_BELOW_PX:
             self.small_refused.append((evidence, box))
 
     def closer_looks(self, count: int, looked: list[np.ndarray] | None = None) -> list[np.ndarray]:
@@ -163,8 +158,7 @@ class Tally:
         for _, box in sorted(self.small_refused, key=lambda e: -e[0]):
             if len(picked) == count:
                 break
-            reach = max(1.5, 0.25 * float(max(box[2] - box[0], box[3] - box[1])))
-            if all(float(np.abs(box - b).max()) > reach for b in looked):
+            if not _near_any(box, looked, 0.25):
                 picked.append(box)
                 looked.append(box)
         return picked
@@ -181,6 +175,18 @@ class Stages:
         now = time.perf_counter()
         self.timings[name] = self.timings.get(name, 0.0) + (now - self.t) * 1e3
         self.t = now
+
+
+def _size(box: np.ndarray) -> float:
+    """A box's (x0 y0 x1 y1) larger side."""
+    return float(max(box[2] - box[0], box[3] - box[1]))
+
+
+def _near_any(box: np.ndarray, boxes: list[np.ndarray], fraction: float) -> bool:
+    """Whether one of ``boxes`` lies where ``box`` does: each corner within ``fraction``
+    of its size (1.5 px at least)."""
+    reach = max(1.5, fraction * _size(box))
+    return any(float(np.abs(box - b).max()) <= reach for b in boxes)
 
 
 def search(
