@@ -15,7 +15,7 @@ The projection's Jacobian comes from ``pipeline.planar_projection`` (OpenCV's mo
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -91,19 +91,24 @@ class EdgeModel:
 
     @classmethod
     def from_polygons(
-        cls, polygons: list[tuple[np.ndarray, bool]], *, rims: Sequence[int] = ()
+        cls, polygons: list[tuple[np.ndarray, bool]], *, rims: Mapping[int, float] | None = None
     ) -> EdgeModel:
         """The sides of closed polygons (pad metres) with the side each is bright on.
 
-        ``rims``: the polygons that are the board's outer edge. A blurred edge is pushed
-        away from a side alongside it whose edge steps the other way (the two bound a
-        band), by a few tenths of a pixel when they lie 2-3 px apart. Where both are
+        ``rims``: the polygons that are the board's outer edge, each with the width of
+        the band of another colour right beyond it (pad metres; 0: the floor, see
+        `pipeline.marks.band_beyond`). A blurred edge is pushed away from a side
+        alongside it whose edge steps the other way (the two bound a band), by a few
+        tenths of a pixel when they lie 2-3 px apart. Where both are
         fitted the two pushes balance; a rim has nothing beyond it (the floor), and
         when the side alongside it is too close to its own neighbour to be fitted (a
         thin ring inside a disc's rim) nothing balances it: a black disc's rim 2.8 px
         out from its red ring made the pad 1 % larger, its altitude 1 % lower, at
         10 m. A rim's side with a side alongside most of its length is fitted where that
-        side is too, or where it lies ``RIM_ALONE`` times as far from it as it needs."""
+        side is too, or where it lies ``RIM_ALONE`` times as far from it as it needs;
+        and a rim with a band beyond it (a hem, whose far edge is no side of the model)
+        where that lies ``RIM_ALONE`` times as far as it needs."""
+        rims = rims or {}
         starts, ends, bright, owner, curved = [], [], [], [], []
         for k, (corners_m, is_bright) in enumerate(polygons):
             c = np.asarray(corners_m, np.float64).reshape(-1, 2)
@@ -120,6 +125,8 @@ class EdgeModel:
         alone = np.maximum(held, clearance / RIM_ALONE)
         lone_rim = np.isin(poly, list(rims)) & (shared >= 0.5)
         clearance = np.where(lone_rim, np.minimum(clearance, alone), clearance)
+        band = np.array([rims.get(int(k)) or np.inf for k in poly])
+        clearance = np.minimum(clearance, band / RIM_ALONE)
         return cls(a, b, np.concatenate(bright), poly, clearance, np.concatenate(curved))
 
 

@@ -26,6 +26,11 @@ MIN_MARK_AREA = 0.0005  # of the picture: smaller specks are texture, not marks
 MAX_MARKS = 16
 FLATNESS = 0.0005  # Douglas-Peucker tolerance, of a mark's perimeter (>= 0.5 px)
 MAX_SIDES = 96
+# Beyond a board's rim, a band of another colour (a fabric pad's hem) this narrow, of
+# the pad's size at most, is looked for: the band's far edge then lies beside the rim.
+MAX_BAND = 0.1
+BAND_STEP = 30.0  # a colour step beyond the rim: this far in BGR at least ...
+BAND_STEP_SHARE = 0.5  # ... and this share of the rim's own step
 
 
 @dataclass(frozen=True, eq=False)
@@ -36,12 +41,14 @@ class Mark:
     corners_m: np.ndarray
     bright: bool
     rim: bool = False  # the board's outer edge: the floor lies beyond it
+    band_m: float = 0.0  # a rim's: the band of another colour right beyond it (`band_beyond`)
 
     def to_dict(self) -> dict:
         return {
             "corners_m": self.corners_m.tolist(),
             "bright": bool(self.bright),
             "rim": bool(self.rim),
+            "band_m": float(self.band_m),
         }
 
 
@@ -103,6 +110,70 @@ def find_marks(
         out.append((area, rect, False, True))
     out.sort(key=lambda item: -item[0])
     return [(poly, bright, rim) for _, poly, bright, rim in out[:MAX_MARKS]]
+
+
+def band_beyond(picture: np.ndarray, rim: np.ndarray) -> float:
+    """The width (picture pixels) of a band of another colour right beyond a board's
+    rim (``rim``: its polygon on ``picture``, BGR), or 0 when there is none.
+
+    The rim of a fabric pad is often a hem: a dark band a few centimetres wide between
+    the board and the floor. In a frame, that band's far edge lies a pixel or two beyond
+    the rim, and a blurred edge is pushed away from an edge beside it that steps the
+    other way: the rim reads too far out (on the bench's hemmed orange pad at 2-12 m,
+    the altitude came 0.3-0.6 % short). Along the rim's
+    outward normals, the colour just beyond it is followed until it steps by
+    ``BAND_STEP`` (and ``BAND_STEP_SHARE`` of the rim's own step); where the picture
+    ends first, that point tells nothing. A band is one found at half the points or
+    more, within ``MAX_BAND`` of the picture's size."""
+    h, w = picture.shape[:2]
+    smooth = cv2.GaussianBlur(picture.astype(np.float32), (0, 0), 1.0)
+    a = rim.astype(np.float64)
+    b = np.roll(a, -1, axis=0)
+    pts, normals = [], []
+    inside = a.reshape(-1, 1, 2).astype(np.float32)
+    for p, q in zip(a, b, strict=True):
+        d = q - p
+        length = float(np.hypot(*d))
+        if length < 1e-9:
+            continue
+        k = max(1, int(length // 2.0))
+        t = (np.arange(k) + 0.5) / k
+        n = np.array([d[1], -d[0]]) / length
+        probe = p + 0.5 * d + 2.0 * n
+        if cv2.pointPolygonTest(inside, (float(probe[0]), float(probe[1])), False) > 0:
+            n = -n  # (outward)
+        pts.append(p + t[:, None] * d)
+        normals.append(np.repeat(n[None], k, axis=0))
+    if not pts:
+        return 0.0
+    p_all, n_all = np.vstack(pts), np.vstack(normals)
+    reach = MAX_BAND * max(h, w)
+    steps = np.arange(-2.0, reach + 0.25, 0.5)
+    xs = (p_all[:, None, 0] + steps[None] * n_all[:, None, 0]).astype(np.float32)
+    ys = (p_all[:, None, 1] + steps[None] * n_all[:, None, 1]).astype(np.float32)
+    out = (xs < 0) | (ys < 0) | (xs > w - 1) | (ys > h - 1)
+    colours = cv2.remap(smooth, xs, ys, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    board, band = colours[:, 0], colours[:, 8]  # 2 px within the rim, 2 px beyond it
+    rim_step = np.linalg.norm(band - board, axis=1)
+    away = np.linalg.norm(colours[:, 9:] - band[:, None], axis=2)
+    beyond = out[:, 9:]  # (the picture has ended)
+    stepped = away > np.maximum(BAND_STEP, BAND_STEP_SHARE * rim_step)[:, None]
+    stepped &= ~beyond
+    first = np.where(stepped.any(axis=1), stepped.argmax(axis=1), -1)
+    ended = np.where(beyond.any(axis=1), beyond.argmax(axis=1), beyond.shape[1])
+    told = (first >= 0) & (first < ended)
+    # (points where the picture ended first tell nothing; the rest must mostly agree)
+    plain_floor = (first < 0) & (ended == beyond.shape[1])
+    if not told.any() or told.sum() < 0.5 * (told.sum() + plain_floor.sum()):
+        return 0.0
+    # The band's far edge: where the colour has come half way to what lies beyond it.
+    rows = np.flatnonzero(told)
+    change = away[rows]
+    plateau = change[np.arange(len(rows)), np.minimum(first[rows] + 4, change.shape[1] - 1)]
+    k = np.maximum((change > 0.5 * plateau[:, None]).argmax(axis=1), 1)
+    lo, hi = change[np.arange(len(rows)), k - 1], change[np.arange(len(rows)), k]
+    frac = np.clip((0.5 * plateau - lo) / np.maximum(hi - lo, 1e-6), 0.0, 1.0)
+    return float(np.median(steps[9:][k - 1] + 0.5 * frac))
 
 
 def _same_outline(a: tuple[float, np.ndarray, bool], b: tuple[float, np.ndarray, bool]) -> bool:

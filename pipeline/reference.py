@@ -16,7 +16,7 @@ from pipeline.edgefit import EdgeModel
 from pipeline.edges import refine_polygon
 from pipeline.hfit import HFit, fit_h, h_deformation
 from pipeline.homography_fit import Deformation
-from pipeline.marks import Mark, find_marks, symmetric_marks
+from pipeline.marks import Mark, band_beyond, find_marks, symmetric_marks
 from pipeline.moments import shape_moments
 from pipeline.preprocess import border_pixels, check_image
 from pipeline.shape_match import ShapeMatcher
@@ -82,7 +82,37 @@ class Reference:
     def edge_model(self) -> EdgeModel:
         """Every side of the pad: the H's and its other marks'."""
         polys = [(self.corners_m, True)] + [(m.corners_m, m.bright) for m in self.marks]
-        rims = [k + 1 for k, m in enumerate(self.marks) if m.rim]
+        rims = {k + 1: 0.0 for k, m in enumerate(self.marks) if m.rim}
+        return EdgeModel.from_polygons(polys, rims=rims)
+
+    @cached_property
+    def hemmed_rims(self) -> Deformation | None:
+        """For `edge_model`'s fits: each rim with a band beyond it (a hem, see
+        `pipeline.marks.band_beyond`) free to lie further out or in along the pad's
+        radius, by about the band's width; None when no rim has one. The hem's far edge
+        pushes the rim's out, by as much as a few tenths of a pixel: the rim then still
+        tells where the pad lies and how it is turned, but not how large it is."""
+        model = self.edge_model
+        hemmed = [k for k, m in enumerate(self.marks) if m.rim and m.band_m > 0]
+        if not hemmed:
+            return None
+        a = np.zeros((len(model.a_m), 2, len(hemmed)))
+        b = np.zeros_like(a)
+        for k, mark in enumerate(hemmed):
+            on = model.polygon == mark + 1
+            a[on, :, k] = model.a_m[on] / np.maximum(np.hypot(*model.a_m[on].T), 1e-9)[:, None]
+            b[on, :, k] = model.b_m[on] / np.maximum(np.hypot(*model.b_m[on].T), 1e-9)[:, None]
+        return Deformation(a, b, np.array([self.marks[k].band_m for k in hemmed]))
+
+    @cached_property
+    def polish_model(self) -> EdgeModel:
+        """`edge_model` for a pose's last steps with the attitude known: a rim with a
+        hem beyond it is fitted only where the hem is ``RIM_ALONE`` times as wide as
+        a side needs (`edge_model` itself when no rim has one)."""
+        if self.hemmed_rims is None:
+            return self.edge_model
+        polys = [(self.corners_m, True)] + [(m.corners_m, m.bright) for m in self.marks]
+        rims = {k + 1: m.band_m for k, m in enumerate(self.marks) if m.rim}
         return EdgeModel.from_polygons(polys, rims=rims)
 
     @cached_property
@@ -90,7 +120,7 @@ class Reference:
         """The sides of the marks alone (None when the pad has none)."""
         if not self.marks:
             return None
-        rims = [k for k, m in enumerate(self.marks) if m.rim]
+        rims = {k: 0.0 for k, m in enumerate(self.marks) if m.rim}
         return EdgeModel.from_polygons([(m.corners_m, m.bright) for m in self.marks], rims=rims)
 
     @cached_property
@@ -253,8 +283,10 @@ class Reference:
         h_poly = refined[0] if refined is not None else fit.corners
         to_m = _pixels_to_metres(ww, wh, pad_size_m)
         corners_m = to_m(h_poly)
+        # (a rim's band: its width in metres, the picture's pixels square)
+        m_per_px = pad_size_m / ww
         marks = tuple(
-            Mark(to_m(poly), bright, rim)
+            Mark(to_m(poly), bright, rim, m_per_px * band_beyond(work, poly) if rim else 0.0)
             for poly, bright, rim in find_marks(smooth, level, board_level, region)
         )
         contour = _outer_contour(region)

