@@ -148,15 +148,18 @@ def band_beyond(picture: np.ndarray, rim: np.ndarray) -> float:
         return 0.0
     p_all, n_all = np.vstack(pts), np.vstack(normals)
     reach = MAX_BAND * max(h, w)
+    # Every half pixel from 2 px within the rim (the board) to 2 px beyond it (the band)
+    # and on from there.
     steps = np.arange(-2.0, reach + 0.25, 0.5)
+    at_band = 8
     xs = (p_all[:, None, 0] + steps[None] * n_all[:, None, 0]).astype(np.float32)
     ys = (p_all[:, None, 1] + steps[None] * n_all[:, None, 1]).astype(np.float32)
-    out = (xs < 0) | (ys < 0) | (xs > w - 1) | (ys > h - 1)
     colours = cv2.remap(smooth, xs, ys, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    board, band = colours[:, 0], colours[:, 8]  # 2 px within the rim, 2 px beyond it
+    board, band = colours[:, 0], colours[:, at_band]
     rim_step = np.linalg.norm(band - board, axis=1)
-    away = np.linalg.norm(colours[:, 9:] - band[:, None], axis=2)
-    beyond = out[:, 9:]  # (the picture has ended)
+    xs, ys, steps = xs[:, at_band + 1 :], ys[:, at_band + 1 :], steps[at_band + 1 :]
+    away = np.linalg.norm(colours[:, at_band + 1 :] - band[:, None], axis=2)
+    beyond = (xs < 0) | (ys < 0) | (xs > w - 1) | (ys > h - 1)  # (the picture has ended)
     stepped = away > np.maximum(BAND_STEP, BAND_STEP_SHARE * rim_step)[:, None]
     stepped &= ~beyond
     first = np.where(stepped.any(axis=1), stepped.argmax(axis=1), -1)
@@ -173,7 +176,7 @@ def band_beyond(picture: np.ndarray, rim: np.ndarray) -> float:
     k = np.maximum((change > 0.5 * plateau[:, None]).argmax(axis=1), 1)
     lo, hi = change[np.arange(len(rows)), k - 1], change[np.arange(len(rows)), k]
     frac = np.clip((0.5 * plateau - lo) / np.maximum(hi - lo, 1e-6), 0.0, 1.0)
-    return float(np.median(steps[9:][k - 1] + 0.5 * frac))
+    return float(np.median(steps[k - 1] + 0.5 * frac))
 
 
 def _same_outline(a: tuple[float, np.ndarray, bool], b: tuple[float, np.ndarray, bool]) -> bool:

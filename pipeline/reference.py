@@ -81,9 +81,7 @@ class Reference:
     @cached_property
     def edge_model(self) -> EdgeModel:
         """Every side of the pad: the H's and its other marks'."""
-        polys = [(self.corners_m, True)] + [(m.corners_m, m.bright) for m in self.marks]
-        rims = {k + 1: 0.0 for k, m in enumerate(self.marks) if m.rim}
-        return EdgeModel.from_polygons(polys, rims=rims)
+        return self._pad_model(hems=False)
 
     @cached_property
     def hemmed_rims(self) -> Deformation | None:
@@ -109,10 +107,12 @@ class Reference:
         """`edge_model` for a pose's last steps with the attitude known: a rim with a
         hem beyond it is fitted only where the hem is ``RIM_ALONE`` times as wide as
         a side needs (`edge_model` itself when no rim has one)."""
-        if self.hemmed_rims is None:
-            return self.edge_model
+        return self.edge_model if self.hemmed_rims is None else self._pad_model(hems=True)
+
+    def _pad_model(self, *, hems: bool) -> EdgeModel:
+        """The H's and the marks' sides, the rims' hems told (``hems``) or not."""
         polys = [(self.corners_m, True)] + [(m.corners_m, m.bright) for m in self.marks]
-        rims = {k + 1: m.band_m for k, m in enumerate(self.marks) if m.rim}
+        rims = {k + 1: m.band_m if hems else 0.0 for k, m in enumerate(self.marks) if m.rim}
         return EdgeModel.from_polygons(polys, rims=rims)
 
     @cached_property
