@@ -4,7 +4,7 @@ import cv2
 import numpy as np
 import pytest
 
-from pipeline.edge_kernels import MIN_DROP, STEP_PX, edge_offsets
+from pipeline.edge_kernels import MIN_DROP, STEP_PX, _side_medians, edge_offsets
 from pipeline.edgefit import EdgeModel
 from pipeline.homography_fit import apply_h, fit_homography, support
 from pipeline.render import PadGeometry
@@ -138,3 +138,14 @@ def test_a_rim_beside_a_thin_ring_is_fitted_only_where_the_ring_is_or_far_from_i
     assert np.array_equal(
         hemmed.clearance_m[plain.polygon > 0], plain.clearance_m[plain.polygon > 0]
     )
+
+
+@pytest.mark.parametrize(("n", "sides"), [(1, 1), (9, 3), (600, 200), (50, 50)])
+def test_each_residual_is_given_its_own_sides_median(n: int, sides: int) -> None:
+    rng = np.random.default_rng(n)
+    side = rng.integers(0, sides, n)
+    r = rng.normal(size=n)
+    want = np.empty(n)
+    for j in np.unique(side):
+        want[side == j] = np.median(r[side == j])
+    assert np.array_equal(_side_medians(r, side), want)
