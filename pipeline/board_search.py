@@ -353,11 +353,12 @@ def _h_pattern(levels: np.ndarray, reference: Reference, H: np.ndarray) -> float
 
 
 def _outline_sides(reference: Reference) -> np.ndarray | None:
-    """Which of the pad's sides are its board's outline (its outermost mark's), or
-    None when the reference found no mark around its H."""
-    if not reference.marks:
+    """Which of the pad's sides are its board's outline (its outermost mark's, of those
+    not faint: on the enlarged far view their edges are lost), or None when the
+    reference found no such mark around its H."""
+    spans = [-1.0 if m.faint else float(np.ptp(m.corners_m, axis=0).max()) for m in reference.marks]
+    if not spans or max(spans) < 0:
         return None
-    spans = [float(np.ptp(m.corners_m, axis=0).max()) for m in reference.marks]
     return reference.edge_model.polygon == 1 + int(np.argmax(spans))
 
 

@@ -31,6 +31,10 @@ MAX_SIDES = 96
 MAX_BAND = 0.1
 BAND_STEP = 30.0  # a colour step beyond the rim: this far in BGR at least ...
 BAND_STEP_SHARE = 0.5  # ... and this share of the rim's own step
+RIM_STEP = 0.25  # a rim: the board steps to what lies beyond by this share of the paint's step
+FAINT_RIM_STEP = 0.5  # ... a faint one, under this share
+BOARD_OVER_H = 1.5  # a board is this many times the H's area at least
+_FRINGE = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (7, 7))  # an edge's blur, 3 px each way
 
 
 @dataclass(frozen=True, eq=False)
@@ -42,6 +46,7 @@ class Mark:
     bright: bool
     rim: bool = False  # the board's outer edge: the floor lies beyond it
     band_m: float = 0.0  # a rim's: the band of another colour right beyond it (`band_beyond`)
+    faint: bool = False  # a rim stepping under half as far as the H's paint (`find_marks`)
 
     def to_dict(self) -> dict:
         return {
@@ -49,23 +54,29 @@ class Mark:
             "bright": bool(self.bright),
             "rim": bool(self.rim),
             "band_m": float(self.band_m),
+            "faint": bool(self.faint),
         }
 
 
 def find_marks(
     smooth: np.ndarray, level: float, board_level: float, h_region: np.ndarray
-) -> list[tuple[np.ndarray, bool, bool]]:
-    """Polygons (picture pixels) of the marks on a smoothed channel, with their brightness
-    and whether each is the board's rim.
+) -> list[tuple[np.ndarray, bool, bool, bool]]:
+    """Polygons (picture pixels) of the marks on a smoothed channel, with their brightness,
+    whether each is the board's rim and whether that rim is faint.
 
     ``level``: half-way between the H's paint and its board; ``board_level``:
     the board's. Boundaries of the paint-coloured regions other than the H
     (outer edges and holes), then the board's own rim against whatever lies
-    beyond it when that differs from the board.
+    beyond it when that differs from the board: by ``RIM_STEP`` of the paint's step from
+    the board at least (a black H on a yellow disc printed on white: on the learned
+    channel the disc's rim steps 27 levels, a third of the H's step, and with it the
+    pad's poses came 0.67 % off the altitude, not 1.14 %). Such a rim, under
+    ``FAINT_RIM_STEP``, is faint: from afar, on a view enlarged by interpolation, its
+    edge is no longer found.
     """
     h, w = smooth.shape
     area = float(h * w)
-    out: list[tuple[float, np.ndarray, bool, bool]] = []  # area, polygon, bright, rim
+    out: list[tuple[float, np.ndarray, bool, bool, bool]] = []  # area, poly, bright, rim, faint
     paint = (smooth > level).astype(np.uint8)
     # Every paint region that touches the H is the H (the H was found at
     # another threshold than this one).
@@ -73,13 +84,13 @@ def find_marks(
     h_labels = np.unique(labels[h_region & (paint > 0)])
     others = paint.copy()
     others[np.isin(labels, h_labels[h_labels > 0]) | h_region] = 0
-    out += [(*b, False) for b in _boundaries(others, smooth, area, bright_inside=True)]
+    out += [(*b, False, False) for b in _boundaries(others, smooth, area, bright_inside=True)]
     # What lies beyond the board (a floor around a disc, the paper around a
     # card) is told by the picture's rim.
     rim = np.concatenate([smooth[0], smooth[-1], smooth[:, 0], smooth[:, -1]]).astype(float)
     beyond = float(np.median(rim))
     step = abs(level - board_level)
-    if abs(beyond - board_level) > 0.5 * step:
+    if abs(beyond - board_level) > RIM_STEP * step:
         cut = 0.5 * (beyond + board_level)
         board = (smooth < cut) if beyond > board_level else (smooth > cut)
         board = board.astype(np.uint8)
@@ -90,10 +101,14 @@ def find_marks(
             # edge is left out, or the board would run into the floor.
             on_board = _off_the_edge(paint)
         # The board component around the H, holes filled: its outer edge is the pad's rim.
-        _, labels = cv2.connectedComponents(board | on_board | h_region.astype(np.uint8))
+        # The H's blurred edge, between the paint's level and the cut, is neither board
+        # nor paint: the H grown over it joins the board (without, a cut near the board's
+        # level left the H alone, and its own outline was taken for the rim).
+        grown = cv2.dilate(h_region.astype(np.uint8), _FRINGE)
+        _, labels = cv2.connectedComponents(board | on_board | grown)
         ys, xs = np.nonzero(h_region)
         k = int(np.bincount(labels[ys, xs]).argmax())
-        if k > 0:
+        if k > 0 and np.count_nonzero(labels == k) > BOARD_OVER_H * np.count_nonzero(grown):
             comp = (labels == k).astype(np.uint8)
             edge = np.concatenate([comp[0], comp[-1], comp[:, 0], comp[:, -1]])
             # A disc cropped to its width touches the picture's edge at four
@@ -102,14 +117,22 @@ def find_marks(
                 rims = _boundaries(
                     comp, smooth, area, bright_inside=beyond < board_level, holes=False, rim=True
                 )
-                # (a floor all round the board made its rim a hole's outline already)
-                out += [(*r, True) for r in rims if not any(_same_outline(r, o[:3]) for o in out)]
-    elif abs(beyond - board_level) < 0.25 * step:
+                # (a floor all round the board made its rim a hole's outline already;
+                # and the marks lie on the board: an outline inside one of them, a ring's
+                # hole cut at a level near the board's, is none of its rim)
+                faint = abs(beyond - board_level) < FAINT_RIM_STEP * step
+                out += [
+                    (*r, True, faint)
+                    for r in rims
+                    if not any(_same_outline(r, o[:3]) for o in out)
+                    and all(_encloses(r[1], o[1]) for o in out)
+                ]
+    else:
         # The board fills the picture to its edge: the edge is the board's rim.
         rect = np.array([[-0.5, -0.5], [w - 0.5, -0.5], [w - 0.5, h - 0.5], [-0.5, h - 0.5]])
-        out.append((area, rect, False, True))
+        out.append((area, rect, False, True, False))
     out.sort(key=lambda item: -item[0])
-    return [(poly, bright, rim) for _, poly, bright, rim in out[:MAX_MARKS]]
+    return [(poly, bright, rim, faint) for _, poly, bright, rim, faint in out[:MAX_MARKS]]
 
 
 def band_beyond(picture: np.ndarray, rim: np.ndarray) -> float:
@@ -186,6 +209,12 @@ def _same_outline(a: tuple[float, np.ndarray, bool], b: tuple[float, np.ndarray,
         return False
     size = float(np.sqrt(max(a[0], b[0])))
     return bool(np.hypot(*(a[1].mean(axis=0) - b[1].mean(axis=0))) <= 1.0 + 0.02 * size)
+
+
+def _encloses(outer: np.ndarray, inner: np.ndarray) -> bool:
+    """Whether the polygon ``outer`` holds every vertex of ``inner`` (to a pixel)."""
+    poly = outer.reshape(-1, 1, 2).astype(np.float32)
+    return all(cv2.pointPolygonTest(poly, (float(x), float(y)), True) >= -1.0 for x, y in inner)
 
 
 def _off_the_edge(mask: np.ndarray) -> np.ndarray:

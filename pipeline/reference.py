@@ -286,8 +286,8 @@ class Reference:
         # (a rim's band: its width in metres, the picture's pixels square)
         m_per_px = pad_size_m / ww
         marks = tuple(
-            Mark(to_m(poly), bright, rim, m_per_px * band_beyond(work, poly) if rim else 0.0)
-            for poly, bright, rim in find_marks(smooth, level, board_level, region)
+            Mark(to_m(poly), bright, rim, m_per_px * band_beyond(work, poly) if rim else 0.0, faint)
+            for poly, bright, rim, faint in find_marks(smooth, level, board_level, region)
         )
         contour = _outer_contour(region)
         mom = shape_moments(contour)

@@ -17,6 +17,7 @@ from pipeline.bench.frames import SCENE_EVERY, make_scenes, make_view
 from pipeline.bench.hint import gravity_hint
 from pipeline.bench.tally import Tally
 from pipeline.render import get_design
+from pipeline.render.designs import Design, Disc, HShape
 from pipeline.render.view import render_view
 
 CAM = Camera.from_fov(640, 480, 60.0)
@@ -94,3 +95,26 @@ def true_homography(
     R = R_pad_cam.T
     t = -R @ position
     return camera.K @ np.column_stack([R[:, 0], R[:, 1], t])
+
+
+# Not one of the bench's designs: a black H on a yellow disc printed on a white sheet,
+# whose disc steps to the sheet a third as far as its H steps to the disc (a faint rim).
+BLACK_ON_YELLOW = Design(
+    name="black_on_yellow",
+    description="black H on a yellow disc printed on a white sheet",
+    size_m=0.8,
+    background=(235, 235, 235),
+    below=((Disc(0.45), (30, 205, 240)),),
+    h=HShape(0.4, 0.5, 0.1, 0.09),
+    h_bgr=(30, 30, 32),
+    grain=1.5,
+)
+
+
+def design_frame(design: Design, i: int, level: str):
+    """Frame ``i`` of the bench's views of ``design`` (seed 0; any design, registered
+    or not): its pad, the attitude hint and the view."""
+    scenes = make_scenes(design, [0, i // SCENE_EVERY], level, ())
+    view, noise_seed = make_view([0, i, 7], CAM, design, level)
+    pad = render_view(scenes.pad, CAM, view, np.random.default_rng(noise_seed))
+    return pad, gravity_hint(view.R_pad_cam, [0, i, 11]), view

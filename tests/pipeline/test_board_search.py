@@ -9,6 +9,8 @@ quadrilateral.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -16,7 +18,7 @@ from pipeline import Camera, Reference, process_frame
 from pipeline.bench.frames import SCENE_EVERY, make_scenes, make_view
 from pipeline.bench.hint import gravity_hint
 from pipeline.bench.tally import Tally
-from pipeline.board_search import _floor_and_noise, _ring_contrast, find_boards
+from pipeline.board_search import _floor_and_noise, _outline_sides, _ring_contrast, find_boards
 from pipeline.candidates import MIN_H_AREA_PX
 from pipeline.homography_fit import apply_h
 from pipeline.preprocess import binarize_channel, border_pixels, to_channel
@@ -206,3 +208,22 @@ def test_the_boards_levels_are_numpys_median_and_percentile(seed):
             assert _ring_contrast(win, ring, percent, floor) == abs(
                 float(np.percentile(around, q)) - floor
             )
+
+
+def test_a_faint_rim_is_not_the_outline_a_far_board_must_show():
+    # A faint rim's edge is lost on the enlarged far view (a black H on a yellow disc on
+    # a white sheet: at 6.5-8 m, 0 of its sides found where the H's were 0.9): the board
+    # is then judged as the pad without marks was, by its H and pattern.
+    d = get_design("orange_ring")
+    ref = Reference.from_image(d.draw().image, d.size_m)
+    outline = _outline_sides(ref)
+    assert outline is not None and outline.any()
+    (rim,) = [k for k, m in enumerate(ref.marks) if m.rim]
+    faint = dataclasses.replace(ref.marks[rim], faint=True)
+    marks = tuple(faint if k == rim else m for k, m in enumerate(ref.marks))
+    dimmed = _outline_sides(dataclasses.replace(ref, marks=marks))
+    widest = max(
+        (k for k in range(len(marks)) if k != rim),
+        key=lambda k: float(np.ptp(marks[k].corners_m, axis=0).max()),
+    )
+    assert dimmed is not None and np.array_equal(dimmed, ref.edge_model.polygon == 1 + widest)

@@ -5,6 +5,7 @@ import pytest
 from pipeline import Reference
 from pipeline.marks import Mark, band_beyond, symmetric_marks
 from pipeline.render import get_design
+from tests.pipeline.bench_support import BLACK_ON_YELLOW
 
 
 def test_a_ring_and_a_disc_rim_are_marks():
@@ -77,3 +78,19 @@ def test_a_pads_hem_is_its_rims_band() -> None:
     for name in ("default", "red_on_black", "icao_circle"):
         d = get_design(name)
         assert all(m.band_m == 0.0 for m in Reference.from_image(d.draw().image, d.size_m).marks)
+
+
+def test_a_disc_whose_rim_steps_less_than_its_h_has_it_as_a_faint_rim() -> None:
+    # On the channel learned from this picture the yellow disc steps to the white sheet
+    # a third as far as the H steps to the disc: its rim is still a mark, traced where
+    # the disc ends (the H's blurred edge joins it to its board: without that the H
+    # alone was taken for the board, and its outline for the rim) ...
+    (rim,) = Reference.from_image(BLACK_ON_YELLOW.draw().image, BLACK_ON_YELLOW.size_m).marks
+    assert rim.rim and rim.faint and not rim.bright and len(rim.corners_m) > 12
+    radius = np.linalg.norm(rim.corners_m, axis=1)
+    assert radius == pytest.approx(np.full(len(radius), 0.36), abs=0.004)
+    # ... and rims that step further are not faint
+    for name in ("orange_ring", "red_on_black", "default"):
+        d = get_design(name)
+        rims = [m for m in Reference.from_image(d.draw().image, d.size_m).marks if m.rim]
+        assert rims and not any(m.faint for m in rims)

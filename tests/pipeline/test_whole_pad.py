@@ -4,8 +4,14 @@ mostly noise, and left out where not found."""
 
 import numpy as np
 
-from pipeline import process_frame
-from tests.pipeline.bench_support import CAM, bench_frames, score_bench_frames
+from pipeline import Reference, process_frame
+from tests.pipeline.bench_support import (
+    BLACK_ON_YELLOW,
+    CAM,
+    bench_frames,
+    design_frame,
+    score_bench_frames,
+)
 
 
 def test_a_printed_ring_blurred_into_one_line_does_not_leave_the_pose_to_the_h_alone():
@@ -64,3 +70,21 @@ def test_a_hemmed_pads_rim_does_not_make_it_larger() -> None:
         errors.append(100.0 * (res.pose.position_m[2] / view.position_m[2] - 1.0))
     assert len(errors) >= 12
     assert abs(float(np.median(errors))) < 0.2, np.round(errors, 2)
+
+
+def test_a_faint_rim_pins_the_pose_as_a_rim_does() -> None:
+    # A black H on a yellow disc on a white sheet: on its learned channel the disc's rim
+    # steps a third as far as the H, and was no mark; posed on the H alone, its clean
+    # views came 1.17 % of the altitude off (median of 30; now 0.29 %).
+    d = BLACK_ON_YELLOW
+    reference = Reference.from_image(d.draw().image, d.size_m)
+    errors = []
+    for i in range(20):
+        frame, g, view = design_frame(d, i, "clean")
+        res = process_frame(frame, reference, CAM, gravity_hint=g)
+        assert res.detected and res.pose is not None
+        # (the pad's half turns look alike: the nearer of the two)
+        turned = np.diag([-1.0, -1.0, 1.0]) @ view.position_m
+        off = min(np.linalg.norm(res.pose.position_m - p) for p in (view.position_m, turned))
+        errors.append(100.0 * off / view.position_m[2])
+    assert float(np.median(errors)) < 0.6, np.round(errors, 2)
