@@ -186,8 +186,8 @@ def _dot(a, b):
 @compiled
 def _side_medians(r, side):
     """For each residual, the median of its side's residuals: the residuals ordered by
-    side once (a pass per side over all of them took three quarters of a ringed pad's
-    fit with a deformation: it has a few hundred sides)."""
+    side once (a pass per side over all of them made the fit of a ringed pad, whose
+    sides are a few hundred, 1.4 times as slow with a deformation)."""
     n = len(r)
     out = np.empty(n)
     order = np.argsort(side, kind="mergesort")
