@@ -108,8 +108,8 @@ def find_marks(
         _, labels = cv2.connectedComponents(board | on_board | grown)
         ys, xs = np.nonzero(h_region)
         k = int(np.bincount(labels[ys, xs]).argmax())
-        if k > 0 and np.count_nonzero(labels == k) > BOARD_OVER_H * np.count_nonzero(grown):
-            comp = (labels == k).astype(np.uint8)
+        comp = (labels == k).astype(np.uint8)
+        if k > 0 and np.count_nonzero(comp) > BOARD_OVER_H * np.count_nonzero(grown):
             edge = np.concatenate([comp[0], comp[-1], comp[:, 0], comp[:, -1]])
             # A disc cropped to its width touches the picture's edge at four
             # points; a board that runs along it has no rim in the picture.

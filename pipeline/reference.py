@@ -98,8 +98,7 @@ class Reference:
         b = np.zeros_like(a)
         for k, mark in enumerate(hemmed):
             on = model.polygon == mark + 1
-            a[on, :, k] = model.a_m[on] / np.maximum(np.hypot(*model.a_m[on].T), 1e-9)[:, None]
-            b[on, :, k] = model.b_m[on] / np.maximum(np.hypot(*model.b_m[on].T), 1e-9)[:, None]
+            a[on, :, k], b[on, :, k] = _radial(model.a_m[on]), _radial(model.b_m[on])
         return Deformation(a, b, np.array([self.marks[k].band_m for k in hemmed]))
 
     @cached_property
@@ -484,6 +483,11 @@ def _outer_contour(region: np.ndarray) -> np.ndarray:
     )
     c = max(contours, key=cv2.contourArea)
     return c.reshape(-1, 2)[::-1].copy()
+
+
+def _radial(pts_m: np.ndarray) -> np.ndarray:
+    """The unit vectors from the pad's centre out to points (N x 2, pad metres)."""
+    return pts_m / np.maximum(np.hypot(*pts_m.T), 1e-9)[:, None]
 
 
 def _pixels_to_metres(width: int, height: int, pad_size_m: float):

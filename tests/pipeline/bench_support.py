@@ -43,14 +43,18 @@ def bench_frames(design_name: str, seed: int, i: int, level: str, **changes):
     """Frame ``i`` of the bench's views at ``level`` (seed ``seed``), with ``changes``
     to the view (`pipeline.render.view.View` fields): its pad, its empty twin, the
     attitude hint, the view and the design's reference."""
-    design = get_design(design_name)
+    pad, empty, hint, view = _views(get_design(design_name), seed, i, level, **changes)
+    return pad, empty, hint, view, _reference(design_name)
+
+
+def _views(design: Design, seed: int, i: int, level: str, **changes):
+    """`bench_frames`' pad, empty twin, attitude hint and view for any design."""
     scenes = make_scenes(design, [seed, i // SCENE_EVERY], level, ())
     view, noise_seed = make_view([seed, i, 7], CAM, design, level)
     view = dataclasses.replace(view, **changes)
     pad = render_view(scenes.pad, CAM, view, np.random.default_rng(noise_seed))
     empty = render_view(scenes.empty, CAM, view, np.random.default_rng(noise_seed))
-    hint = gravity_hint(view.R_pad_cam, [seed, i, 11])
-    return pad, empty, hint, view, _reference(design_name)
+    return pad, empty, gravity_hint(view.R_pad_cam, [seed, i, 11]), view
 
 
 def sweep_frames(design: str, camera: Camera, point: int, altitude: float, j: int):
@@ -114,7 +118,5 @@ BLACK_ON_YELLOW = Design(
 def design_frame(design: Design, i: int, level: str):
     """Frame ``i`` of the bench's views of ``design`` (seed 0; any design, registered
     or not): its pad, the attitude hint and the view."""
-    scenes = make_scenes(design, [0, i // SCENE_EVERY], level, ())
-    view, noise_seed = make_view([0, i, 7], CAM, design, level)
-    pad = render_view(scenes.pad, CAM, view, np.random.default_rng(noise_seed))
-    return pad, gravity_hint(view.R_pad_cam, [0, i, 11]), view
+    pad, _, hint, view = _views(design, 0, i, level)
+    return pad, hint, view
