@@ -33,6 +33,10 @@ MIN_SHAPE_IOU = 0.4  # whitened overlap with the reference's H (look-alikes rank
 MAX_SHAPE_RESIDUAL = 0.1  # CSS corners: homography RMS / sqrt(area) (real H < 0.05)
 HOPELESS_AFFINE = 3.0  # an affine fit this many times worse: no homography is tried
 MIN_H_SUPPORT = 0.6  # share of the H's sides found on the channel's edges
+# A fit of the H that has found less than this of its sides after a few steps gives up:
+# on the design bench's frames and the altitude sweep's far ones (9,000 fits), none that
+# ended with MIN_H_SUPPORT had found under 0.3 by then, and half of those that did not had.
+HOPELESS_SUPPORT = 0.3
 CONFIDENT_SUPPORT = 0.9  # a fit this good is not tried from another start
 # Edge support plus shape overlap: two views of how much of an H this is. Real
 # H's, even drawn with other proportions than the reference's, reach 1.45 and
@@ -173,7 +177,14 @@ def fit_h_sides(
     deform = reference.h_deformation
     best: tuple[HomographyFit, float] | None = None
     for how in (None, deform):
-        fit = fit_homography(levels, reference.h_edges, H0, search_px=search_px, deform=how)
+        fit = fit_homography(
+            levels,
+            reference.h_edges,
+            H0,
+            search_px=search_px,
+            deform=how,
+            give_up_below=HOPELESS_SUPPORT,
+        )
         if fit is None or fit.support < MIN_H_SUPPORT:
             continue
         unlike = float(np.abs(fit.shape / deform.sigma).max()) if len(fit.shape) else 0.0

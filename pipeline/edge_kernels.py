@@ -20,6 +20,7 @@ STEP_PX = 0.5  # between the samples across an edge
 MAX_REACH_PX = 8.0  # the farthest a side's edge is looked for
 BORDER_PX = 2.0  # points this near the image's border (3 px on the far side) are not measured
 SUPPORT_PX = 0.75  # an edge this near where a side is put counts as found
+GIVE_UP_STEPS = 3  # (see homography_steps' give_up_below)
 
 
 @compiled
@@ -232,6 +233,7 @@ def homography_steps(
     min_side_px,
     damping,
     min_drop,
+    give_up_below,
 ):
     """The Gauss-Newton steps of ``pipeline.homography_fit.fit_homography`` on the
     normalised homography ``h0`` (8 entries, pad coordinates through ``Tm``, pixels
@@ -240,7 +242,9 @@ def homography_steps(
     p_k held near 0 by ``deform_sigma[k]`` (K = 0: none). The samples lie at ``pts_t``
     along their sides (``pts_side``). Returns, after the step that found the most of
     the sides' edges, (h, p, rms of the inliers, per side the share of its seen
-    samples on an edge (nan: none seen)), and whether a step was taken at all."""
+    samples on an edge (nan: none seen)), and whether a step was taken at all. A fit
+    that has found less than ``give_up_below`` of its sides after ``GIVE_UP_STEPS``
+    steps stops there."""
     s = a_m.shape[0]
     n = pts_side.shape[0]
     kd = deform_sigma.shape[0]
@@ -387,6 +391,8 @@ def homography_steps(
             best_h, best_p, best_rms, best_found = h.copy(), p.copy(), fitted, found.copy()
             best_support = support
         if it > 0 and np.max(np.abs(step[:8])) < 0.05 * sp:  # under ~0.05 px anywhere
+            break
+        if it + 1 == GIVE_UP_STEPS and best_support < give_up_below:
             break
     return best_h, best_p, best_rms, best_found, best_rms >= 0.0
 

@@ -166,6 +166,7 @@ def fit_homography(
     sides_alike: bool = True,
     deform: Deformation | None = None,
     min_clearance_px: float = MIN_CLEARANCE_PX,
+    give_up_below: float = 0.0,
 ) -> HomographyFit | None:
     """Refine ``H0`` so that the model's sides lie on the edges of ``image``.
 
@@ -183,6 +184,9 @@ def fit_homography(
         wider or narrower than the reference's), fitted with the homography.
     min_clearance_px : sides closer than this to a side alongside them are not
         fitted (their edges blur into one).
+    give_up_below : a fit that has found less than this share of the sides after
+        a few steps (``edge_kernels.GIVE_UP_STEPS``) stops there: for a caller that
+        refuses far better fits anyway.
 
     Returns
     -------
@@ -239,6 +243,7 @@ def fit_homography(
         MIN_SIDE_PX,
         DAMPING,
         MIN_DROP,
+        float(give_up_below),
     )
     if not ok:
         return None

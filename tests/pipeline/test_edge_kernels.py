@@ -4,7 +4,7 @@ import cv2
 import numpy as np
 import pytest
 
-from pipeline.edge_kernels import MIN_DROP, STEP_PX, _side_medians, edge_offsets
+from pipeline.edge_kernels import GIVE_UP_STEPS, MIN_DROP, STEP_PX, _side_medians, edge_offsets
 from pipeline.edgefit import EdgeModel
 from pipeline.homography_fit import apply_h, fit_homography, support
 from pipeline.render import PadGeometry
@@ -149,3 +149,27 @@ def test_each_residual_is_given_its_own_sides_median(n: int, sides: int) -> None
     for j in np.unique(side):
         want[side == j] = np.median(r[side == j])
     assert np.array_equal(_side_medians(r, side), want)
+
+
+def test_a_fit_that_finds_few_of_its_sides_gives_up_after_a_few_steps():
+    h = PadGeometry().h_corners_m
+    model = EdgeModel.from_polygons([(h, True)])
+    start = np.array([[700.0, 80, 330], [-60, -650, 250], [0.05, 0.08, 1]])
+    # Blurred noise: edges everywhere, none of them an H's.
+    rng = np.random.default_rng(1)
+    noise = cv2.GaussianBlur(rng.uniform(0, 255, (480, 640)).astype(np.float32), (0, 0), 1.5)
+    full = fit_homography(noise, model, start)
+    short = fit_homography(noise, model, start, iterations=GIVE_UP_STEPS)
+    assert full is not None and short is not None and full.support < 0.3
+    assert not np.allclose(full.H, short.H)  # (the later steps would change it)
+    gave_up = fit_homography(noise, model, start, give_up_below=0.3)
+    np.testing.assert_array_equal(gave_up.H, short.H)
+    # A fit finding its H goes on to the end.
+    big = np.zeros((480 * 8, 640 * 8), np.float32)
+    pts = np.round(((apply_h(start, h) + 0.5) * 8 - 0.5) * 16).astype(np.int32)
+    cv2.fillPoly(big, [pts], 180, shift=4)
+    img = cv2.resize(big, (640, 480), interpolation=cv2.INTER_AREA) + 30.0
+    moved = start.copy()
+    moved[0, 2] += 2.0
+    kept = fit_homography(img, model, moved, give_up_below=0.3)
+    np.testing.assert_array_equal(kept.H, fit_homography(img, model, moved).H)
