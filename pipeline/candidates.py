@@ -106,7 +106,7 @@ def candidates(
     """Regions whose whitened shape overlaps the reference's H, most alike first
     (the ``top`` most alike)."""
     lo = 0.5 * reference.solidity
-    shaped = [r for r in found if lo <= r.solidity <= 0.97 and r.span >= MIN_H_SPAN_PX]
+    shaped = [r for r in found if r.span >= MIN_H_SPAN_PX and lo <= r.solidity <= 0.97]
     hits = reference.shape.match_many([r.contour for r in shaped], MIN_SHAPE_IOU, top=top)
     out = [Candidate(r, hit.iou, hit.affine) for r, hit in zip(shaped, hits, strict=True) if hit]
     out.sort(key=lambda c: -c.iou)

@@ -18,7 +18,13 @@ class Region:
 
     contour: np.ndarray  # (N, 2) int32, x y
     area: float
-    solidity: float
+
+    @cached_property
+    def solidity(self) -> float:
+        """Its area over its convex hull's (asked for of the regions wide enough to be
+        an H: a textured floor's many small ones are turned down by their span first)."""
+        hull_area = cv2.contourArea(cv2.convexHull(self.contour))
+        return self.area / hull_area if hull_area > 0 else 0.0
 
     @cached_property
     def box(self) -> tuple[int, int, int, int]:
@@ -53,9 +59,8 @@ def regions(mask: np.ndarray, *, min_area: float, max_area: float) -> list[Regio
         # an outer boundary of a white region has negative oriented area here.
         if signed > 0:
             continue
-        hull_area = cv2.contourArea(cv2.convexHull(c))
         pts = c.reshape(-1, 2)[::-1].copy()  # flip to positive orientation
-        out.append(Region(pts, area, area / hull_area if hull_area > 0 else 0.0))
+        out.append(Region(pts, area))
     return out
 
 

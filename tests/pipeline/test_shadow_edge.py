@@ -49,7 +49,7 @@ def test_a_pad_half_in_a_hard_shadow_is_found_where_it_is(reference, scene, edge
 
 def _square(x0: int, size: int) -> Region:
     corners = np.array([[0, 0], [size - 1, 0], [size - 1, size - 1], [0, size - 1]]) + x0
-    return Region(corners.astype(np.int32), float(size * size), 1.0)
+    return Region(corners.astype(np.int32), float(size * size))
 
 
 def test_a_shape_of_the_floors_own_texture_does_not_stand_out():
