@@ -87,13 +87,19 @@ def test_an_edge_is_found_where_it_is_and_only_with_the_right_polarity():
     assert not edge_offsets(faint, proj, normal, 3.0, MIN_DROP)[1].any()
 
 
+def _drawn(polygon_m: np.ndarray, H: np.ndarray) -> np.ndarray:
+    """A 640 x 480 picture of the polygon put by ``H``, bright on dark, drawn 8x finer
+    and averaged (its edges anti-aliased as a camera's are)."""
+    big = np.zeros((480 * 8, 640 * 8), np.float32)
+    pts = np.round(((apply_h(H, polygon_m) + 0.5) * 8 - 0.5) * 16).astype(np.int32)
+    cv2.fillPoly(big, [pts], 180, shift=4)
+    return cv2.resize(big, (640, 480), interpolation=cv2.INTER_AREA) + 30.0
+
+
 def test_fit_homography_recovers_a_drawn_h_and_support_finds_its_sides():
     h = PadGeometry().h_corners_m
     true = np.array([[700.0, 80, 330], [-60, -650, 250], [0.05, 0.08, 1]])
-    big = np.zeros((480 * 8, 640 * 8), np.float32)
-    pts = np.round(((apply_h(true, h) + 0.5) * 8 - 0.5) * 16).astype(np.int32)
-    cv2.fillPoly(big, [pts], 180, shift=4)
-    img = cv2.resize(big, (640, 480), interpolation=cv2.INTER_AREA) + 30.0
+    img = _drawn(h, true)
     model = EdgeModel.from_polygons([(h, True)])
     start = true.copy()
     start[0, 2] += 2.0
@@ -165,10 +171,7 @@ def test_a_fit_that_finds_few_of_its_sides_gives_up_after_a_few_steps():
     gave_up = fit_homography(noise, model, start, give_up_below=0.3)
     np.testing.assert_array_equal(gave_up.H, short.H)
     # A fit finding its H goes on to the end.
-    big = np.zeros((480 * 8, 640 * 8), np.float32)
-    pts = np.round(((apply_h(start, h) + 0.5) * 8 - 0.5) * 16).astype(np.int32)
-    cv2.fillPoly(big, [pts], 180, shift=4)
-    img = cv2.resize(big, (640, 480), interpolation=cv2.INTER_AREA) + 30.0
+    img = _drawn(h, start)
     moved = start.copy()
     moved[0, 2] += 2.0
     kept = fit_homography(img, model, moved, give_up_below=0.3)
