@@ -367,13 +367,26 @@ def _check(
     # 0.21-0.27 over the picture's, 95-100 % of their marks found; an H on a floor has
     # no such marks around it).
     off = seen.board - seen.reference_board
+    sure = seen.ncc >= SURE_NCC
+    # (a board within its tolerance only once the paint's clipping is allowed for)
+    excused = seen.paint >= SATURATED_LUMA and off > BOARD_TOLERANCE
     if seen.paint >= SATURATED_LUMA and off > 0:
         # Overexposed paint clips: brighter than it reads, it makes its board read
         # brighter against it than it is (by up to the light it lost).
         off = max(0.0, seen.board - CLIPPED_GAIN * seen.reference_board)
     if seen.hue > MAX_HUE or abs(off) > SURE_BOARD_TOLERANCE:
         return "unframed"
-    if abs(off) > BOARD_TOLERANCE and not (seen.ncc >= SURE_NCC or vouched()):
+    if abs(off) > BOARD_TOLERANCE and not (sure or vouched()):
+        return "unframed"
+    # So excused, the board is no evidence: an H painted on a lighter floor reads the
+    # same. A pad with marks besides its H shows them, or its pattern (a probe design,
+    # a ring and letters around its H: an H of 16 px on concrete, paint at 241, passed
+    # in 1 of 60 empty views; no bench design's pad, nor the photos', was lost).
+    if (
+        excused
+        and reference.painted_marks
+        and not (sure or framed() or _pattern_around(hit, binary, reference))
+    ):
         return "unframed"
     samples = stroke_samples(reference.corners_m, hit.fit.H, reference.is_paint)
     if cut_through(image, reference.projection.weights, samples):

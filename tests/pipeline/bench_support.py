@@ -17,7 +17,7 @@ from pipeline.bench.frames import SCENE_EVERY, make_scenes, make_view
 from pipeline.bench.hint import gravity_hint
 from pipeline.bench.tally import Tally
 from pipeline.render import get_design
-from pipeline.render.designs import Design, Disc, HShape
+from pipeline.render.designs import Design, Disc, HShape, Rects, Ring
 from pipeline.render.view import render_view
 
 CAM = Camera.from_fov(640, 480, 60.0)
@@ -115,8 +115,35 @@ BLACK_ON_YELLOW = Design(
 )
 
 
+# Not one of the bench's designs either: a white H in a thin ring above a row of
+# letters, on a dark grey board.
+TEXT_BELOW = Design(
+    name="text_below",
+    description="white H in a ring above a row of letters, on a dark grey board",
+    size_m=1.0,
+    background=(60, 60, 62),
+    below=(
+        (Ring(0.44, 0.47), (232, 235, 235)),
+        (
+            Rects(tuple((x, -0.36, x + 0.05, -0.28) for x in np.arange(-0.3, 0.3, 0.08))),
+            (232, 235, 235),
+        ),
+    ),
+    h=HShape(0.34, 0.4, 0.08, 0.07),
+    h_bgr=(232, 235, 235),
+    symmetric=False,
+    grain=2.0,
+)
+
+
 def design_frame(design: Design, i: int, level: str):
     """Frame ``i`` of the bench's views of ``design`` (seed 0; any design, registered
     or not): its pad, the attitude hint and the view."""
-    pad, _, hint, view = _views(design, 0, i, level)
+    pad, _, hint, view = design_frames(design, i, level)
     return pad, hint, view
+
+
+def design_frames(design: Design, i: int, level: str):
+    """`design_frame`'s pad with its empty twin: the pad, the empty twin, the attitude
+    hint and the view."""
+    return _views(design, 0, i, level)

@@ -6,9 +6,15 @@ from __future__ import annotations
 
 import pytest
 
-from pipeline import process_frame
+from pipeline import Reference, process_frame
 from pipeline.render.degrade import Exposure
-from tests.pipeline.bench_support import CAM, assert_found_and_empty_twin_not, bench_frames
+from tests.pipeline.bench_support import (
+    CAM,
+    TEXT_BELOW,
+    assert_found_and_empty_twin_not,
+    bench_frames,
+    design_frames,
+)
 
 
 @pytest.mark.parametrize(
@@ -41,3 +47,16 @@ def test_clipped_paint_partly_shadowed_is_allowed_for(design: str) -> None:
     # ICAO pad's clipped paint reads 244 of 255, its board 0.56 of it against the
     # picture's 0.33.
     assert_found_and_empty_twin_not(*bench_frames(design, 0, 2, "real"))
+
+
+def test_clipped_paint_does_not_vouch_for_an_h_without_its_pads_marks() -> None:
+    # The bench's view 39 of a pad with a ring and letters around its H: the empty
+    # twin holds an H painted on a lighter floor, its paint clipped (241 of 255), the
+    # floor 0.70 of it against the board's 0.38 on the picture, within what the clipped
+    # light explains; but neither the ring nor the letters are around it.
+    pad, empty, hint, _ = design_frames(TEXT_BELOW, 39, "today")
+    reference = Reference.from_image(TEXT_BELOW.draw().image, TEXT_BELOW.size_m)
+    assert reference.painted_marks
+    assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected
+    found = process_frame(pad, reference, CAM, gravity_hint=hint)
+    assert found.detected, found.reason
