@@ -302,6 +302,8 @@ def _check(
         return "unclear"
     # (how much of the rest of the pad is found around the H: asked at most once)
     marks = functools.cache(functools.partial(_marks_found_around, hit, binary, reference))
+    # (and whether the whole pad's pattern is found around it: asked at most once too)
+    pattern = functools.cache(functools.partial(_pattern_around, hit, binary, reference))
 
     def framed() -> bool:
         return marks() >= MIN_MARKS_FOUND
@@ -338,9 +340,7 @@ def _check(
         # nearly whole (``MIN_RIM_FOUND``).
         if marks() < (MIN_MARKS_FOUND if reference.painted_marks else MIN_RIM_FOUND):
             return "unclear"
-    elif span < _framed_below_px(reference) and not (
-        framed() or _pattern_around(hit, binary, reference)
-    ):
+    elif span < _framed_below_px(reference) and not (framed() or pattern()):
         # A few pixels of H-shaped texture are everywhere: so small, the H is the
         # pad's only where the rest of the pad (its rim, bars, rings) is found too:
         # its marks' edges, or (the marks a pixel or two wide, their edges merged)
@@ -368,9 +368,10 @@ def _check(
     # no such marks around it).
     off = seen.board - seen.reference_board
     sure = seen.ncc >= SURE_NCC
+    clipped = seen.paint >= SATURATED_LUMA
     # (a board within its tolerance only once the paint's clipping is allowed for)
-    excused = seen.paint >= SATURATED_LUMA and off > BOARD_TOLERANCE
-    if seen.paint >= SATURATED_LUMA and off > 0:
+    excused = clipped and off > BOARD_TOLERANCE
+    if clipped and off > 0:
         # Overexposed paint clips: brighter than it reads, it makes its board read
         # brighter against it than it is (by up to the light it lost).
         off = max(0.0, seen.board - CLIPPED_GAIN * seen.reference_board)
@@ -382,11 +383,7 @@ def _check(
     # same. A pad with marks besides its H shows them, or its pattern (a probe design,
     # a ring and letters around its H: an H of 16 px on concrete, paint at 241, passed
     # in 1 of 60 empty views; no bench design's pad, nor the photos', was lost).
-    if (
-        excused
-        and reference.painted_marks
-        and not (sure or framed() or _pattern_around(hit, binary, reference))
-    ):
+    if excused and reference.painted_marks and not (sure or framed() or pattern()):
         return "unframed"
     samples = stroke_samples(reference.corners_m, hit.fit.H, reference.is_paint)
     if cut_through(image, reference.projection.weights, samples):
