@@ -1,6 +1,8 @@
 """An H too faint to count alone counts by the rest of its pad, on evidence chance does
-not give: a board's outline alone found nearly whole (``find.MIN_RIM_FOUND``), and a
-pose that finds the pad's edges (``frame.MIN_BOARD_SUPPORT``).
+not give: a board's outline alone found nearly whole (``find.MIN_RIM_FOUND``), marks
+found on enough of their length when few of their sides are seen
+(``measure.MIN_MARK_SIDES_SEEN``), and a pose that finds
+the pad's edges (``frame.MIN_BOARD_SUPPORT``).
 
 Texture, tiles and printed patterns offer straight edges in every direction: on the
 shared negatives seen through the photos bench's degradations (``pipeline.bench.photos``),
@@ -19,6 +21,7 @@ import pytest
 
 import pipeline.find
 import pipeline.frame
+import pipeline.measure
 from pipeline import Camera, Reference, process_frame
 from pipeline.bench.photos import FOV_DEG, degraded_view, load_manifest
 from pipeline.bench.sweep import altitude_points
@@ -103,3 +106,16 @@ def test_a_faint_speck_whose_pose_finds_no_pad_edges_is_no_pad(monkeypatch) -> N
     assert not _detected(image, "refs/default_pad.png")
     monkeypatch.setattr(pipeline.frame, "MIN_BOARD_SUPPORT", 0.0)
     assert _detected(image, "refs/default_pad.png")
+
+
+@needs_photos
+@pytest.mark.slow
+def test_a_few_mark_sides_seen_count_by_their_length(monkeypatch) -> None:
+    """In carpet noise by a rotated photo's straight border, an H-shaped speck of 6 px
+    with a closer look's window holding two of the paper pad's mark sides: a third of
+    its sheet's outline (95 px) along the border, and a triangle's side of 6 px in the
+    noise, 80 % (half the sides, a third of their length)."""
+    image = _negative_view("neg_111", 3, 0)
+    assert not _detected(image, "refs/dark_H_ring_synth.png")
+    monkeypatch.setattr(pipeline.measure, "MIN_MARK_SIDES_SEEN", 1)
+    assert _detected(image, "refs/dark_H_ring_synth.png")  # (what the two sides said)
