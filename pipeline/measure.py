@@ -88,6 +88,12 @@ MARK_SIDE_PX = 4.0  # a mark's straight side shorter than this (a star's point) 
 # 15 px fitted alone is off by up to a pixel and a half (its strokes are 2 px wide).
 MOVED_PX = 1.5
 AFFINE_MIN_SUPPORT = 0.2  # of the pad's edges, for a pose from the H's affine part
+# A pose under which neither the pad's edges nor its H's own are found is not this pad's:
+# an H of other strokes, located with its strokes free, posed as the reference's H finds
+# none of its sides (on the real-world mix's grass, 0-2 %). The bench's right poses found
+# 9 % of the pad's edges at least, the real photos' (their references drawn, not cut
+# from them) 1 %, and then 16 % of their H's.
+MIN_EDGES_FOUND = 0.05
 HEADING_MARGIN = 0.05  # of the marks' edges: one half turn must find this many more
 
 
@@ -172,6 +178,10 @@ def measure(
             fit, support, ambiguous = fitted
             if camera_height_m(fit.rvec, fit.tvec) <= 0.0:
                 continue  # (edges taken astray can fit a camera under the ground)
+            if support < MIN_EDGES_FOUND and (
+                edge_support(levels, reference.h_edges, cam, fit.rvec, fit.tvec) < MIN_EDGES_FOUND
+            ):
+                continue
             return Measured(view.to_frame @ Hs, fit, support, ambiguous, told)
     return None
 
