@@ -316,8 +316,9 @@ def _marks_found(fit: HomographyFit, reference: Reference) -> float:
     use &= (length >= MARK_SIDE_PX) | model.curved
     found = fit.side_found[use]
     seen = np.isfinite(found)
-    if np.count_nonzero(seen) >= MIN_MARK_SIDES_SEEN:
-        return float(found[seen].sum()) / np.count_nonzero(seen)
+    count = np.count_nonzero(seen)
+    if count >= MIN_MARK_SIDES_SEEN:
+        return float(found[seen].sum()) / count
     weight = length[use][seen]
     return float(found[seen] @ weight) / float(weight.sum()) if seen.any() else 0.0
 

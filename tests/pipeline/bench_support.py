@@ -9,12 +9,14 @@ import dataclasses
 import functools
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 
 from pipeline import Camera, Reference, process_frame
 from pipeline.bench.frames import SCENE_EVERY, make_scenes, make_view
 from pipeline.bench.hint import gravity_hint
+from pipeline.bench.photos import FOV_DEG, degraded_view, load_manifest
 from pipeline.bench.tally import Tally
 from pipeline.render import get_design
 from pipeline.render.designs import Design, Disc, HShape, Rects, Ring
@@ -25,6 +27,30 @@ PHOTOS = Path(__file__).resolve().parents[2].parent / "shared" / "photos"
 needs_photos = pytest.mark.skipif(
     not (PHOTOS / "manifest.json").exists(), reason="../shared/photos is not beside the checkout"
 )
+
+
+@functools.cache
+def photo_reference(file: str) -> Reference:
+    """The shared photos' reference picture ``file`` (as the manifest names it)."""
+    manifest = load_manifest(PHOTOS)
+    entries = [r for d in manifest["designs"].values() for r in d["references"]]
+    entry = next(e for e in [*entries, manifest["default_reference"]] if e["file"] == file)
+    return Reference.from_image(cv2.imread(str(PHOTOS / file)), entry["pad_size_m"])
+
+
+def photo_view(name: str, seed: int, k: int) -> np.ndarray:
+    """View ``k`` of the shared photo whose file holds ``name``, in the photos bench's
+    run of seed ``seed``."""
+    items = load_manifest(PHOTOS)["items"]
+    index = next(i for i, item in enumerate(items) if name in item["file"])
+    return degraded_view(cv2.imread(str(PHOTOS / items[index]["file"])), seed, index, k)[0]
+
+
+def photo_detected(image: np.ndarray, reference_file: str) -> bool:
+    """Whether a pad is found in a photo (the photos bench's camera) with a reference."""
+    h, w = image.shape[:2]
+    camera = Camera.from_fov(w, h, FOV_DEG)
+    return process_frame(image, photo_reference(reference_file), camera).detected
 
 
 def score_bench_frames(design_name: str, frames: tuple[int, ...], level: str = "today") -> Tally:

@@ -1,8 +1,8 @@
 """An H too faint to count alone counts by the rest of its pad, on evidence chance does
 not give: a board's outline alone found nearly whole (``find.MIN_RIM_FOUND``), marks
 found on enough of their length when few of their sides are seen
-(``measure.MIN_MARK_SIDES_SEEN``), and a pose that finds
-the pad's edges (``frame.MIN_BOARD_SUPPORT``).
+(``measure.MIN_MARK_SIDES_SEEN``), and a pose that finds the pad's edges
+(``frame.MIN_BOARD_SUPPORT``).
 
 Texture, tiles and printed patterns offer straight edges in every direction: on the
 shared negatives seen through the photos bench's degradations (``pipeline.bench.photos``),
@@ -13,25 +13,21 @@ pads far away, their H's as faint, have their rim found whole.
 
 from __future__ import annotations
 
-from functools import cache
-
-import cv2
-import numpy as np
 import pytest
 
 import pipeline.find
 import pipeline.frame
 import pipeline.measure
-from pipeline import Camera, Reference, process_frame
-from pipeline.bench.photos import FOV_DEG, degraded_view, load_manifest
+from pipeline import process_frame
 from pipeline.bench.sweep import altitude_points
 from pipeline.measure import MIN_MARKS_FOUND
 from pipeline.render import get_design
 from tests.pipeline.bench_support import (
     CAM,
-    PHOTOS,
     assert_found_and_empty_twin_not,
     needs_photos,
+    photo_detected,
+    photo_view,
     sweep_frames,
 )
 
@@ -57,27 +53,6 @@ def test_a_faint_h_far_away_counts_with_its_whole_rim(altitude_m, j, monkeypatch
     assert not process_frame(pad, reference, CAM, gravity_hint=hint).detected
 
 
-@cache
-def _reference(file: str) -> Reference:
-    manifest = load_manifest(PHOTOS)
-    entries = [r for d in manifest["designs"].values() for r in d["references"]]
-    entry = next(e for e in [*entries, manifest["default_reference"]] if e["file"] == file)
-    return Reference.from_image(cv2.imread(str(PHOTOS / file)), entry["pad_size_m"])
-
-
-def _negative_view(name: str, seed: int, k: int) -> np.ndarray:
-    """View ``k`` of a shared negative in the photos bench's run of seed ``seed``."""
-    items = load_manifest(PHOTOS)["items"]
-    index = next(i for i, item in enumerate(items) if name in item["file"])
-    return degraded_view(cv2.imread(str(PHOTOS / items[index]["file"])), seed, index, k)[0]
-
-
-def _detected(image: np.ndarray, reference_file: str) -> bool:
-    h, w = image.shape[:2]
-    camera = Camera.from_fov(w, h, FOV_DEG)
-    return process_frame(image, _reference(reference_file), camera).detected
-
-
 @needs_photos
 @pytest.mark.slow
 @pytest.mark.parametrize(
@@ -91,10 +66,10 @@ def _detected(image: np.ndarray, reference_file: str) -> bool:
 def test_a_faint_speck_with_half_a_rim_around_it_is_no_pad(
     negative, seed, k, reference, monkeypatch
 ) -> None:
-    image = _negative_view(negative, seed, k)
-    assert not _detected(image, reference)
+    image = photo_view(negative, seed, k)
+    assert not photo_detected(image, reference)
     monkeypatch.setattr(pipeline.find, "MIN_RIM_FOUND", MIN_MARKS_FOUND)
-    assert _detected(image, reference)  # (what half a rim said)
+    assert photo_detected(image, reference)  # (what half a rim said)
 
 
 @needs_photos
@@ -102,10 +77,10 @@ def test_a_faint_speck_with_half_a_rim_around_it_is_no_pad(
 def test_a_faint_speck_whose_pose_finds_no_pad_edges_is_no_pad(monkeypatch) -> None:
     """In a printed marker's squares, a faint speck of 7 px with the default pad's
     marks half found around it, posed on 8 % of the pad's edges."""
-    image = _negative_view("neg_108", 3, 0)
-    assert not _detected(image, "refs/default_pad.png")
+    image = photo_view("neg_108", 3, 0)
+    assert not photo_detected(image, "refs/default_pad.png")
     monkeypatch.setattr(pipeline.frame, "MIN_BOARD_SUPPORT", 0.0)
-    assert _detected(image, "refs/default_pad.png")
+    assert photo_detected(image, "refs/default_pad.png")
 
 
 @needs_photos
@@ -115,7 +90,7 @@ def test_a_few_mark_sides_seen_count_by_their_length(monkeypatch) -> None:
     with a closer look's window holding two of the paper pad's mark sides: a third of
     its sheet's outline (95 px) along the border, and a triangle's side of 6 px in the
     noise, 80 % (half the sides, a third of their length)."""
-    image = _negative_view("neg_111", 3, 0)
-    assert not _detected(image, "refs/dark_H_ring_synth.png")
+    image = photo_view("neg_111", 3, 0)
+    assert not photo_detected(image, "refs/dark_H_ring_synth.png")
     monkeypatch.setattr(pipeline.measure, "MIN_MARK_SIDES_SEEN", 1)
-    assert _detected(image, "refs/dark_H_ring_synth.png")  # (what the two sides said)
+    assert photo_detected(image, "refs/dark_H_ring_synth.png")  # (what the two sides said)

@@ -8,13 +8,17 @@ picture still shows some of the pad's edges, or its H's.
 
 from __future__ import annotations
 
-import cv2
 import pytest
 
 import pipeline.measure
-from pipeline import Camera, Reference, process_frame
-from pipeline.bench.photos import FOV_DEG, degraded_view, load_manifest
-from tests.pipeline.bench_support import CAM, PHOTOS, bench_frames, needs_photos
+from pipeline import process_frame
+from tests.pipeline.bench_support import (
+    CAM,
+    bench_frames,
+    needs_photos,
+    photo_detected,
+    photo_view,
+)
 
 
 @pytest.mark.parametrize("i", [11, 14, 16])
@@ -32,11 +36,4 @@ def test_a_pad_unlike_its_drawn_reference_is_still_found() -> None:
     # A degraded view of a real paper pad, its reference a drawing of the design: its
     # pose finds 1 % of the pad's edges (the drawing's ring and triangle are not the
     # print's), and 16 % of its H's.
-    manifest = load_manifest(PHOTOS)
-    items = manifest["items"]
-    index = next(i for i, item in enumerate(items) if "pos_082" in item["file"])
-    image = degraded_view(cv2.imread(str(PHOTOS / items[index]["file"])), 1, index, 2)[0]
-    entry = manifest["designs"][items[index]["design"]]["references"][0]
-    reference = Reference.from_image(cv2.imread(str(PHOTOS / entry["file"])), entry["pad_size_m"])
-    h, w = image.shape[:2]
-    assert process_frame(image, reference, Camera.from_fov(w, h, FOV_DEG)).detected
+    assert photo_detected(photo_view("pos_082", 1, 2), "refs/dark_H_ring_synth.png")
