@@ -61,6 +61,9 @@ def test_a_faint_h_far_away_counts_with_its_whole_rim(altitude_m, j, monkeypatch
         ("neg_111", 1, 2, "refs/dark_block_H_synth.png"),  # carpet noise
         ("neg_108", 2, 0, "refs/red_on_black_synth_darkbg.png"),  # a printed marker
         ("neg_110", 4, 1, "refs/red_on_black_synth_darkbg.png"),
+        # (not faint: a speck of 6 px, evidence 1.47, 0.71 of the rim; small, it counts
+        # only with the rest of its pad, here that rim alone)
+        ("neg_111", 5, 0, "refs/dark_block_H_synth.png"),
     ],
 )
 def test_a_faint_speck_with_half_a_rim_around_it_is_no_pad(
