@@ -29,7 +29,8 @@ from backend.api.messages import (
     TelemetryMessage,
 )
 from backend.encoder import unpack_binary
-from tests.backend.api.support import AUTH, LiveServer, make_settings, wait_for
+from backend.loopback import LoopbackServer
+from tests.backend.api.support import AUTH, make_settings, wait_for
 
 pytestmark = pytest.mark.slow
 
@@ -38,7 +39,7 @@ pytestmark = pytest.mark.slow
 def live(tmp_path_factory):
     settings = make_settings(tmp_path_factory.mktemp("live"), sim_ready_after=0.2)
     # Small socket send buffers: a client that does not read pushes back at once.
-    with LiveServer(settings, send_buffer=8192) as server:
+    with LoopbackServer(settings, send_buffer=8192) as server:
         yield server
 
 

@@ -20,7 +20,8 @@ from websockets.exceptions import ConnectionClosed, InvalidStatus
 from websockets.sync.client import connect
 
 from backend.api import ws as ws_module
-from tests.backend.api.support import AUTH, TOKEN, LiveServer, free_port, make_settings, wait_for
+from backend.loopback import LoopbackServer
+from tests.backend.api.support import AUTH, TOKEN, free_port, make_settings, wait_for
 
 pytestmark = pytest.mark.slow
 
@@ -29,9 +30,9 @@ VISER_PROTOCOL = f"viser-v{viser.__version__}"
 
 
 @pytest.fixture(scope="module")
-def live(tmp_path_factory) -> Iterator[LiveServer]:
+def live(tmp_path_factory) -> Iterator[LoopbackServer]:
     settings = make_settings(tmp_path_factory.mktemp("data"), viser_port=free_port())
-    with LiveServer(settings) as server:
+    with LoopbackServer(settings) as server:
         yield server
 
 
