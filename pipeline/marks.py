@@ -26,6 +26,7 @@ MIN_MARK_AREA = 0.0005  # of the picture: smaller specks are texture, not marks
 MAX_MARKS = 16
 FLATNESS = 0.0005  # Douglas-Peucker tolerance, of a mark's perimeter (>= 0.5 px)
 MAX_SIDES = 96
+REPEATED_PX = 0.5  # a vertex this near the one before it is the same corner
 # Beyond a board's rim, a band of another colour (a fabric pad's hem) this narrow, of
 # the pad's size at most, is looked for: the band's far edge then lies beside the rim.
 MAX_BAND = 0.1
@@ -253,9 +254,18 @@ def _boundaries(
         if len(poly) <= 8:  # straight-sided: its sides measured on the gray edges
             refined = refine_polygon(smooth, poly, bright_inside=bright_inside != is_hole)
             if refined is not None:
-                poly = refined[0]
-        out.append((a, poly, bool(bright_inside != is_hole)))
+                poly = _without_repeats(refined[0])
+        if len(poly) >= 3:
+            out.append((a, poly, bool(bright_inside != is_hole)))
     return out
+
+
+def _without_repeats(poly: np.ndarray) -> np.ndarray:
+    """The polygon without the vertices that repeat the one before them: a corner traced
+    cut off (a hole's outline) has its two ends refined onto one point, and a side of no
+    length has no direction to measure its edge along."""
+    keep = np.hypot(*(poly - np.roll(poly, 1, axis=0)).T) > REPEATED_PX
+    return poly[keep]
 
 
 def _polygon(contour: np.ndarray) -> np.ndarray | None:

@@ -1,3 +1,5 @@
+import warnings
+
 import cv2
 import numpy as np
 import pytest
@@ -94,3 +96,28 @@ def test_a_disc_whose_rim_steps_less_than_its_h_has_it_as_a_faint_rim() -> None:
         d = get_design(name)
         rims = [m for m in Reference.from_image(d.draw().image, d.size_m).marks if m.rim]
         assert rims and not any(m.faint for m in rims)
+
+
+def test_a_square_holes_cut_corners_make_no_repeated_vertices() -> None:
+    """A white square cut out of a red disc (a hospital pad's cross, simplified): its hole
+    is traced with its corners cut off, whose two ends the refinement puts on one point.
+    A side of no length has no direction: its edge's normal came out nan."""
+    pic = np.full((600, 600, 3), 255, np.uint8)
+    cv2.circle(pic, (300, 300), 290, (30, 30, 200), -1, cv2.LINE_AA)
+    cv2.rectangle(pic, (180, 180), (420, 420), (255, 255, 255), -1)
+    h = np.array(  # a red H, 180 x 200 (a 45 px leg, a 40 px bar)
+        [[210, 200], [255, 200], [255, 280], [345, 280], [345, 200], [390, 200], [390, 400],
+         [345, 400], [345, 320], [255, 320], [255, 400], [210, 400]],
+        np.int32,
+    )  # fmt: skip
+    cv2.fillPoly(pic, [h], (30, 30, 200), cv2.LINE_AA)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        ref = Reference.from_image(pic, 1.0)
+        model = ref.edge_model
+    for mark in ref.marks:
+        c = mark.corners_m
+        assert np.hypot(*(c - np.roll(c, 1, axis=0)).T).min() > 0.0
+    assert np.hypot(*(model.b_m - model.a_m).T).min() > 0.0
+    square = [m for m in ref.marks if len(m.corners_m) <= 8]
+    assert [len(m.corners_m) for m in square] == [4]
