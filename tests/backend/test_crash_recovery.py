@@ -12,7 +12,6 @@ import signal
 import sqlite3
 import stat
 import subprocess
-import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -20,7 +19,8 @@ from pathlib import Path
 import httpx
 import pytest
 
-from tests.backend.api.support import free_port, wait_for
+from tests.backend.api.support import wait_for
+from tests.serve import free_port, serve_command
 
 pytestmark = pytest.mark.slow
 
@@ -38,9 +38,8 @@ def serve(data_dir: Path, port: int) -> Iterator[subprocess.Popen]:
         "VISLAND_SIM_SPEEDUP": "2",
         "PYTHONUNBUFFERED": "1",
     }
-    cmd = [sys.executable, "-m", "backend", "serve", "--port", str(port), "--viser-port", "0"]
     proc = subprocess.Popen(
-        [*cmd, "--data-dir", str(data_dir), "--log-level", "warning"],
+        serve_command(port, 0, data_dir, "--log-level", "warning"),
         cwd=ROOT,
         env=env,
         stdout=subprocess.DEVNULL,

@@ -13,13 +13,9 @@ from pathlib import Path
 import httpx
 import pytest
 
+from tests.serve import free_port, serve_command
+
 ROOT = Path(__file__).resolve().parents[2]
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 @pytest.mark.slow
@@ -27,18 +23,7 @@ def test_serve_prints_urls_runs_and_stops_on_sigint(tmp_path):
     port, viser_port = free_port(), free_port()
     env = {**os.environ, "VISLAND_SIM_READY_AFTER": "0.1", "PYTHONUNBUFFERED": "1"}
     proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "backend",
-            "serve",
-            "--port",
-            str(port),
-            "--viser-port",
-            str(viser_port),
-            "--data-dir",
-            str(tmp_path),
-        ],
+        serve_command(port, viser_port, tmp_path),
         cwd=ROOT,
         env=env,
         stdout=subprocess.PIPE,

@@ -22,6 +22,7 @@ from sim.camera import (
     VehiclePose,
     camera_pose_in_pad_frame,
 )
+from tests.serve import free_port
 
 
 def test_camera_mount_matches_the_simulated_camera():
@@ -36,14 +37,8 @@ def test_yaw_hint_is_the_yaw_the_camera_really_has(pad, yaw_deg):
     assert abs((got - yaw_of(R_pad_cam) + 180) % 360 - 180) < 1e-9
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 def test_viser_serves_the_scene_and_takes_updates():
-    port = _free_port()
+    port = free_port()
     viewer = Viewer3D(
         "127.0.0.1",
         port,

@@ -8,7 +8,6 @@ import json
 import os
 import re
 import signal
-import socket
 import subprocess
 import sys
 import threading
@@ -20,6 +19,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+
+from tests.serve import free_port, serve_command
 
 CHROMIUM = Path("/usr/bin/chromium")
 ROOT = Path(__file__).resolve().parents[2]
@@ -48,12 +49,6 @@ expect = sync_api.expect
 
 
 # --------------------------------------------------------------------------- processes
-
-
-def free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 class Proc:
@@ -166,24 +161,17 @@ def start_station(tmp: Path, ready_after: float) -> Station:
     data_dir = tmp / "data"
     server = Proc(
         f"server-{port}",
-        [
-            sys.executable,
-            "-m",
-            "backend",
-            "serve",
-            "--port",
-            str(port),
-            "--viser-port",
-            str(viser_port),
-            "--data-dir",
-            str(data_dir),
+        serve_command(
+            port,
+            viser_port,
+            data_dir,
             "--token",
             TOKEN,
             "--mavlink",
             f"tcp:127.0.0.1:{mav_port}",
             "--log-level",
             "warning",
-        ],
+        ),
         logs,
     )
     url = f"http://127.0.0.1:{port}"

@@ -15,7 +15,6 @@ import http.server
 import os
 import signal
 import subprocess
-import sys
 import threading
 import time
 from collections.abc import Iterator
@@ -24,7 +23,8 @@ from pathlib import Path
 
 import pytest
 
-from tests.e2e.support import DIST, NO_CHROMIUM, ROOT, expect, free_port
+from tests.e2e.support import DIST, NO_CHROMIUM, ROOT, expect
+from tests.serve import free_port, serve_command
 
 TOKEN = "e2e-sec-token-5b1f9c7e"
 
@@ -59,20 +59,7 @@ def station(tmp_path_factory) -> Iterator[Served]:
     }
     with log.open("wb") as out:
         proc = subprocess.Popen(
-            [
-                sys.executable,
-                "-m",
-                "backend",
-                "serve",
-                "--port",
-                str(port),
-                "--viser-port",
-                str(viser_port),
-                "--data-dir",
-                str(tmp / "data"),
-                "--log-level",
-                "info",
-            ],
+            serve_command(port, viser_port, tmp / "data", "--log-level", "info"),
             cwd=ROOT,
             env=env,
             stdout=out,

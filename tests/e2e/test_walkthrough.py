@@ -9,7 +9,6 @@ and the ports are free ones, so the test takes minutes, not more.
 from __future__ import annotations
 
 import re
-import sys
 from pathlib import Path
 
 import pytest
@@ -21,10 +20,10 @@ from tests.e2e.support import (
     Proc,
     confirm,
     expect,
-    free_port,
     number_in,
     screenshot,
 )
+from tests.serve import free_port, serve_command
 
 pytestmark = [pytest.mark.e2e, pytest.mark.slow, NO_CHROMIUM]
 
@@ -35,20 +34,7 @@ def test_a_new_operator_lands_the_stand_in_by_precision_landing(browser, tmp_pat
     port, viser_port = free_port(), free_port()
     server = Proc(
         "make-run",
-        [
-            sys.executable,
-            "-m",
-            "backend",
-            "serve",
-            "--port",
-            str(port),
-            "--viser-port",
-            str(viser_port),
-            "--data-dir",
-            str(tmp_path / "data"),
-            "--sim-ready-after",
-            "0.3",
-        ],
+        serve_command(port, viser_port, tmp_path / "data", "--sim-ready-after", "0.3"),
         tmp_path,
     )
     context = browser.new_context(viewport={"width": 1280, "height": 720})

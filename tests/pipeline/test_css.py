@@ -10,27 +10,9 @@ import numpy as np
 import pytest
 
 from pipeline.css import css_corners, detect_corners, gaussian_window, trace_edges
+from tests.pipeline.shapes import H_OUTLINE
 
 # --- helpers --------------------------------------------------------------------------
-
-# An 'H' (3 wide, 5 tall, 1-wide bars): 12 corners, 8 convex (90) and 4 concave (270).
-H_OUTLINE = np.array(
-    [
-        (0, 0),
-        (1, 0),
-        (1, 2),
-        (2, 2),
-        (2, 0),
-        (3, 0),
-        (3, 5),
-        (2, 5),
-        (2, 3),
-        (1, 3),
-        (1, 5),
-        (0, 5),
-    ],
-    float,
-)
 
 
 def edge_map(size: int = 100) -> np.ndarray:

@@ -11,25 +11,8 @@ import numpy as np
 import pytest
 
 from pipeline.moments import ShapeMoments, hu_distance, shape_moments
+from tests.pipeline.shapes import H_OUTLINE
 
-# An 'H' (3 wide, 5 tall, 1-wide bars), counter-clockwise in math axes.
-H_OUTLINE = np.array(
-    [
-        (0, 0),
-        (1, 0),
-        (1, 2),
-        (2, 2),
-        (2, 0),
-        (3, 0),
-        (3, 5),
-        (2, 5),
-        (2, 3),
-        (1, 3),
-        (1, 5),
-        (0, 5),
-    ],
-    float,
-)
 # Clearly asymmetric, so that every Hu invariant is far from 0.
 BLOB = np.array([(10, 10), (120, 15), (100, 60), (60, 40), (30, 90)], float)
 

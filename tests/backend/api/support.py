@@ -4,7 +4,6 @@ server: `backend.loopback.LoopbackServer`)."""
 from __future__ import annotations
 
 import contextlib
-import socket
 import time
 from collections.abc import Callable, Iterator
 
@@ -46,12 +45,6 @@ def wait_for(predicate: Callable[[], object], timeout: float, step: float = 0.05
             return last
         time.sleep(step)
     raise AssertionError(f"condition not met within {timeout} s (last value {last!r})")
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 @contextlib.contextmanager

@@ -21,7 +21,8 @@ from websockets.sync.client import connect
 
 from backend.api import ws as ws_module
 from backend.loopback import LoopbackServer
-from tests.backend.api.support import AUTH, TOKEN, free_port, make_settings, wait_for
+from tests.backend.api.support import AUTH, TOKEN, make_settings, wait_for
+from tests.serve import free_port
 
 pytestmark = pytest.mark.slow
 
