@@ -3,7 +3,7 @@
 The search finds the H at a working resolution; the pad is measured in a
 window around it at the frame's own resolution (no finer than
 ``MEASURE_SPAN_PX`` across the pad: a pixel in a few hundred is all a pose
-needs), where its edges are sharpest.
+needs), where its edges are sharpest; a small pad's window enlarged.
 """
 
 from __future__ import annotations
@@ -39,9 +39,16 @@ from pipeline.pose import (
 )
 from pipeline.preprocess import smooth_channel
 from pipeline.reference import Reference
-from pipeline.view import View
+from pipeline.view import MAX_ENLARGEMENT, View
 
 MEASURE_SPAN_PX = 320.0  # the pad is measured at most this many pixels across
+# A pad narrower than this (frame pixels) is measured on a window interpolated up to
+# MAX_ENLARGEMENT: at the frame's own resolution its H's blurred sides are a pixel or
+# two apart (on the altitude sweep with the attitude, 640 x 480 pads of 30-34 px came
+# 1.6 % of the altitude off against 1.2-1.3 % enlarged, 1280 x 720 pads of 17 px 2.16 %
+# against 1.95 %). Not larger ones: the design bench's paper pad (51-305 px, its H a
+# quarter of it) came 3.1 % off at p95 enlarged where its H was under 24 px, 1.8 % not.
+ENLARGED_BELOW_PX = 48.0
 MAX_TILT_OFF_DEG = 3.0  # a refined pose may lean this far from the attitude's level
 # With the attitude known, a pad whose pixels insist on leaning further than this from
 # level is not the pad lying flat (an H of other proportions seen at a slant, or a wrong
@@ -70,6 +77,11 @@ MAX_BENT = 0.01  # of the pad's span: the RMS of a pose that the homography fits
 # pads) within 2.26 %; an I-beam painted on grass, taken for grass_paint's H stretched
 # 2.5:1, at 5.6 %, and the sweep's far poses 6-10 % off at 3.4-5.4 %.
 MAX_LEVEL_BENT = 0.03
+# Without the attitude, the RMS past which the homography is no plane's that this camera
+# sees: the shared photos' pads, through an assumed lens and the photos bench's
+# degradations, fitted within 3 % (252 found at seeds 1-2); an H squashed to a sliver
+# on a carpet's noise (neg_111, seed 9, closer look), at 18 %.
+MAX_UNPOSED = 0.1
 WIDE_SEARCH_PX = 6.0  # how far the whole pad's edges are first looked for
 SELF_SUFFICIENT_PX = 100.0  # an H this large pins the pose by itself
 MIN_MARKS_FOUND = 0.5  # of the marks' resolvable sides, for the whole pad to count
@@ -130,7 +142,10 @@ def measure(
     px = apply_h(H, outline)
     span = span_of(px)
     box = np.concatenate([px.min(axis=0), px.max(axis=0)])
-    view = View.around(box, frame.shape, max(4.0, 0.1 * span), MEASURE_SPAN_PX / max(span, 1.0))
+    most = MAX_ENLARGEMENT if span < ENLARGED_BELOW_PX else 1.0
+    view = View.around(
+        box, frame.shape, max(4.0, 0.1 * span), MEASURE_SPAN_PX / max(span, 1.0), max_scale=most
+    )
     if view is None:
         return None
     if found is not None and _covers(found[0], view):
@@ -453,6 +468,8 @@ def _fit_pose(
         # to edges that are not all the pad's): on the bench's views such poses were
         # 8-52 degrees off; the right ones fitted within 0.8 % (1.4 % once in 315).
         ambiguous |= rms > MAX_BENT * _span(px)
+        if rms > MAX_UNPOSED * _span(px):
+            return None
         fit = EdgeFit(rvec, tvec, rms, len(pts_m), 0)
     support = edge_support(levels, reference.edge_model, cam, fit.rvec, fit.tvec)
     if polish and (gravity is None or shown >= POLISH_SHOWN_PX_PER_RAD):

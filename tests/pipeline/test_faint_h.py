@@ -72,7 +72,10 @@ def test_a_faint_speck_with_half_a_rim_around_it_is_no_pad(
     image = photo_view(negative, seed, k)
     assert not photo_detected(image, reference)
     monkeypatch.setattr(pipeline.find, "MIN_RIM_FOUND", MIN_MARKS_FOUND)
-    assert photo_detected(image, reference)  # (what half a rim said)
+    # (what half a rim said, the pad measured at the frame's own resolution: the
+    # printed marker's two specks, measured enlarged, pose on too few pad edges too)
+    monkeypatch.setattr(pipeline.measure, "ENLARGED_BELOW_PX", 0.0)
+    assert photo_detected(image, reference)
 
 
 @needs_photos
@@ -83,6 +86,8 @@ def test_a_faint_speck_whose_pose_finds_no_pad_edges_is_no_pad(monkeypatch) -> N
     image = photo_view("neg_108", 3, 0)
     assert not photo_detected(image, "refs/default_pad.png")
     monkeypatch.setattr(pipeline.frame, "MIN_BOARD_SUPPORT", 0.0)
+    # (nor does its pose fit its own points within a tenth of its span)
+    monkeypatch.setattr(pipeline.measure, "MAX_UNPOSED", float("inf"))
     assert photo_detected(image, "refs/default_pad.png")
 
 
@@ -96,4 +101,7 @@ def test_a_few_mark_sides_seen_count_by_their_length(monkeypatch) -> None:
     image = photo_view("neg_111", 3, 0)
     assert not photo_detected(image, "refs/dark_H_ring_synth.png")
     monkeypatch.setattr(pipeline.measure, "MIN_MARK_SIDES_SEEN", 1)
-    assert photo_detected(image, "refs/dark_H_ring_synth.png")  # (what the two sides said)
+    # (what the two sides said, the pad measured at the frame's own resolution: measured
+    # enlarged, its pose finds too few of the pad's edges as well)
+    monkeypatch.setattr(pipeline.measure, "ENLARGED_BELOW_PX", 0.0)
+    assert photo_detected(image, "refs/dark_H_ring_synth.png")

@@ -1,7 +1,8 @@
 """The order of the whole frame's searches: a far pad's H, located on the working view
 but too small there to be judged, sends the search to the enlarged view before the
-working view's other thresholds; a first look at the coarse view fits no mark too
-small for it (`pipeline.find.FIRST_LOOK_MIN_SPAN_PX`)."""
+working view's other thresholds; a frame wider than the working view is searched at
+its own resolution before it is enlarged; a first look at the coarse view fits no
+mark too small for it (`pipeline.find.FIRST_LOOK_MIN_SPAN_PX`)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import numpy as np
 
 import pipeline.find
 import pipeline.frame
-from pipeline import process_frame
+from pipeline import Camera, process_frame
 from pipeline.find import Tally
 from pipeline.frame import COARSE_WIDTH_PX
 from tests.pipeline.bench_support import CAM, sweep_frames
@@ -39,13 +40,13 @@ def _position_error(res, view) -> float:
     )
 
 
-def _found(log: list[tuple[int, str]], point: int, altitude: float, j: int):
-    """The altitude sweep's frame ``j`` of ``point`` (640 x 480), its pad found within
-    5 % of the altitude with ``log`` holding the views searched; its empty twin, the
-    attitude hint and the reference."""
-    pad, empty, view, hint, reference = sweep_frames("default", CAM, point, altitude, j)
+def _found(log: list[tuple[int, str]], point: int, altitude: float, j: int, camera=CAM):
+    """The altitude sweep's frame ``j`` of ``point`` (640 x 480 unless ``camera``), its
+    pad found within 5 % of the altitude with ``log`` holding the views searched; its
+    empty twin, the attitude hint and the reference."""
+    pad, empty, view, hint, reference = sweep_frames("default", camera, point, altitude, j)
     log.clear()
-    res = process_frame(pad, reference, CAM, gravity_hint=hint)
+    res = process_frame(pad, reference, camera, gravity_hint=hint)
     assert res.detected and res.pose is not None, res.reason
     assert _position_error(res, view) < 0.05 * altitude
     return empty, hint, reference
@@ -94,6 +95,24 @@ def test_without_a_small_h_refused_the_shadow_thresholds_come_before_the_enlarge
         (640, "tophat"),
         ENLARGED,
     ]
+
+
+def test_a_wide_frames_far_pad_is_looked_for_at_its_own_resolution_before_it_is_doubled(
+    monkeypatch,
+):
+    # The altitude sweep's 1280 x 720 frames at 24 m (point 15): the pad spans 25 px,
+    # its H some 7 px of the working view (too small to be located there) and 14 px
+    # of the frame, where it is found: the doubled frame (2560 px, some four times the
+    # time) is not searched.
+    camera = Camera.from_fov(1280, 720, 60.0)
+    log = _searched(monkeypatch)
+    for j in (0, 1):
+        empty, hint, reference = _found(log, 15, 24.0, j, camera)
+        assert (1280, "adaptive") in log and max(w for w, _ in log) == 1280, log
+        # Without the pad, the doubled frame comes last, after the frame's own.
+        log.clear()
+        assert not process_frame(empty, reference, camera, gravity_hint=hint).detected
+        assert log[-2:] == [(1280, "adaptive"), (2560, "adaptive")], log
 
 
 def _first_look_fits(monkeypatch) -> list[float]:
