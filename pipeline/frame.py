@@ -11,15 +11,14 @@ working width of ``SEARCH_WIDTH_PX`` (with two more thresholds), then a wider
 frame at its own resolution, and last enlarged toward ``FAR_SEARCH_WIDTH_PX`` (a
 far pad is too small at the working width, and its H's legs of 2 px lose their
 shape at the frame's own resolution: a 640 or a 1280 px frame doubled, 1920 px by
-a third). An H located on a view but too
-small there to be judged is looked at closer at once: a window around it, doubled,
-then the enlarged whole frame, before the working view's other thresholds.
-Whatever finds the H (``pipeline.find``), the pad is then measured at the frame's
-own resolution around it (a small pad's enlarged), or on the enlarged view that
-found it (``pipeline.measure``). When no H is found, a pad whose H is too far to be placed,
-or spoilt, is looked for by its board (``pipeline.board_search``) on the finest
-view. The result says which way found it (``found_by``: "follow", "track",
-"search" or "board").
+a third). An H located on a view but too small there to be judged is looked at
+closer at once: a window around it, doubled, then the enlarged whole frame, before
+the working view's other thresholds. Whatever finds the H (``pipeline.find``), the
+pad is then measured at the frame's own resolution around it (a small pad's
+enlarged), or on the enlarged view that found it (``pipeline.measure``). When no H
+is found, a pad whose H is too far to be placed, or spoilt, is looked for by its
+board (``pipeline.board_search``) on the finest view. The result says which way
+found it (``found_by``: "follow", "track", "search" or "board").
 """
 
 from __future__ import annotations
