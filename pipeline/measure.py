@@ -467,8 +467,9 @@ def _fit_pose(
         # A homography no pose fits within a hundredth of the pad's span is bent (fitted
         # to edges that are not all the pad's): on the bench's views such poses were
         # 8-52 degrees off; the right ones fitted within 0.8 % (1.4 % once in 315).
-        ambiguous |= rms > MAX_BENT * _span(px)
-        if rms > MAX_UNPOSED * _span(px):
+        span = _span(px)
+        ambiguous |= rms > MAX_BENT * span
+        if rms > MAX_UNPOSED * span:
             return None
         fit = EdgeFit(rvec, tvec, rms, len(pts_m), 0)
     support = edge_support(levels, reference.edge_model, cam, fit.rvec, fit.tvec)

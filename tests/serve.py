@@ -14,8 +14,10 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
-def serve_command(port: int, viser_port: int, data_dir: Path, *extra: str) -> list[str]:
-    """``python -m backend serve`` on these ports and data directory, then ``extra``."""
+def serve_command(port: int, viser_port: int | None, data_dir: Path, *extra: str) -> list[str]:
+    """``python -m backend serve`` on these ports (``viser_port`` None: its default) and
+    data directory, then ``extra``."""
+    viser = [] if viser_port is None else ["--viser-port", str(viser_port)]
     return [
         sys.executable,
         "-m",
@@ -23,8 +25,7 @@ def serve_command(port: int, viser_port: int, data_dir: Path, *extra: str) -> li
         "serve",
         "--port",
         str(port),
-        "--viser-port",
-        str(viser_port),
+        *viser,
         "--data-dir",
         str(data_dir),
         *extra,

@@ -70,16 +70,7 @@ def test_a_busy_port_is_a_one_line_error(tmp_path):
         busy.listen(1)
         port = busy.getsockname()[1]
         out = subprocess.run(
-            [
-                sys.executable,
-                "-m",
-                "backend",
-                "serve",
-                "--port",
-                str(port),
-                "--data-dir",
-                str(tmp_path),
-            ],
+            serve_command(port, None, tmp_path),
             cwd=ROOT,
             capture_output=True,
             text=True,
