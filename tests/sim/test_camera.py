@@ -21,18 +21,9 @@ from sim.camera import (
     rot_ned_body,
     rot_ned_pad,
 )
+from tests.polling import wait_until
 
 pytestmark = [pytest.mark.timeout(30), pytest.mark.usefixtures("no_leftover_threads")]
-
-
-def wait_until(pred, timeout: float = 5.0) -> bool:
-    """Poll ``pred`` until it is true or ``timeout`` s pass (threads need scheduling)."""
-    deadline = time.monotonic() + timeout
-    while not pred():
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.02)
-    return True
 
 
 def pose(n=0.0, e=0.0, d=-5.0, roll=0.0, pitch=0.0, yaw=0.0) -> VehiclePose:

@@ -11,7 +11,7 @@ from collections.abc import Iterator
 
 import pytest
 
-from tests.sitl.support import SITL_DIR, Flight, start_flight
+from tests.sitl.support import SITL_DIR, Flight, running_flight
 
 
 @pytest.fixture
@@ -19,25 +19,17 @@ def fresh_flight() -> Iterator[Flight]:
     """A SITL of its own, from a fresh eeprom, the link connected first."""
     if SITL_DIR is None:
         pytest.skip("no ArduCopter SITL")
-    sitl, flight = start_flight()
-    try:
+    with running_flight() as flight:
         yield flight
-    finally:
-        flight.close()
-        sitl.stop()
 
 
 @pytest.fixture(scope="session")
 def shared_flight() -> Iterator[Flight]:
     if SITL_DIR is None:
         pytest.skip("no ArduCopter SITL")
-    sitl, flight = start_flight()
-    try:
+    with running_flight() as flight:
         flight.wait_ready()
         yield flight
-    finally:
-        flight.close()
-        sitl.stop()
 
 
 @pytest.fixture

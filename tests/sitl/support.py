@@ -13,11 +13,14 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import Any
 
+import numpy as np
 import pytest
 
+from backend.frames import rot_ned_body
 from backend.link import VehicleLink
 from sim.sitl import Sitl, SitlObserver, default_speedup, find_sitl_dir, wait_ready
 from sim.vehicle import SimConfig, SimVehicle, VehicleServer
@@ -26,6 +29,8 @@ SITL_DIR = find_sitl_dir()
 requires_sitl = pytest.mark.skipif(
     SITL_DIR is None, reason="no ArduCopter SITL in ../shared/sitl (or $VISLAND_SITL_DIR)"
 )
+# The genuine-SITL case of a test run against several kinds of vehicle (``running_flight``).
+SITL_KIND = pytest.param("sitl", id="sitl", marks=[pytest.mark.sitl, requires_sitl])
 
 
 class StandIn:
@@ -195,6 +200,31 @@ def start_flight(kind: str = "sitl") -> tuple[Sitl | StandIn, Flight]:
     except BaseException:
         sitl.stop()
         raise
+
+
+@contextmanager
+def running_flight(kind: str = "sitl") -> Iterator[Flight]:
+    """A fresh vehicle of ``kind``, connected; link and vehicle stopped on leaving, whatever
+    happened."""
+    sitl, flight = start_flight(kind)
+    try:
+        yield flight
+    finally:
+        flight.close()
+        sitl.stop()
+
+
+def send_landing_target(f: Flight, pad_ned: tuple[float, float, float]) -> None:
+    """LANDING_TARGET (BODY_FRD, position_valid) of a pad at NED ``pad_ned``, from the truth."""
+    truth = f.obs.truth(f.origin())
+    assert truth is not None and f.obs.boot_s is not None
+    rel = np.asarray(pad_ned) - np.asarray(truth.position_ned)
+    body = rot_ned_body(truth.roll, truth.pitch, truth.yaw).T @ rel
+    f.link.send_landing_target(
+        *map(float, body),
+        time_usec=int(f.obs.boot_s * 1e6),
+        distance=float(np.linalg.norm(body)),
+    )
 
 
 def horizontal(a: tuple[float, ...], b: tuple[float, ...]) -> float:

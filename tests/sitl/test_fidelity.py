@@ -11,30 +11,31 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 
-import numpy as np
 import pytest
 
 from backend.missions.extnav import ARMING_CHECK_ALL_BUT_VISION
 from sim.vehicle import ParamStore
 from sim.vision_feed import VisionStandIn
-from tests.sitl.support import Flight, horizontal, requires_sitl, start_flight
+from tests.sitl.support import (
+    SITL_KIND,
+    Flight,
+    horizontal,
+    running_flight,
+    send_landing_target,
+)
 
 MAV_CMD_SET_EKF_SOURCE_SET = 42007
 
 KINDS = [
     pytest.param("standin", id="standin"),
-    pytest.param("sitl", id="sitl", marks=[pytest.mark.sitl, requires_sitl]),
+    SITL_KIND,
 ]
 
 
 @pytest.fixture(params=KINDS)
 def vehicle(request: pytest.FixtureRequest) -> Iterator[Flight]:
-    sitl, flight = start_flight(request.param)
-    try:
+    with running_flight(request.param) as flight:
         yield flight
-    finally:
-        flight.close()
-        sitl.stop()
 
 
 def texts_since(f: Flight, index: int) -> list[str]:
@@ -43,28 +44,6 @@ def texts_since(f: Flight, index: int) -> list[str]:
 
 def true_alt(f: Flight, ground_d: float) -> float:
     return ground_d - f.true_ned()[2]
-
-
-def send_target(f: Flight, pad: tuple[float, float, float]) -> None:
-    """LANDING_TARGET (BODY_FRD, position_valid) of a pad at NED ``pad``, from the truth."""
-    truth = f.obs.truth(f.origin())
-    assert truth is not None and f.obs.boot_s is not None
-    cr, sr = math.cos(truth.roll), math.sin(truth.roll)
-    cp, sp = math.cos(truth.pitch), math.sin(truth.pitch)
-    cy, sy = math.cos(truth.yaw), math.sin(truth.yaw)
-    R = np.array(
-        [
-            [cp * cy, sr * sp * cy - cr * sy, cr * sp * cy + sr * sy],
-            [cp * sy, sr * sp * sy + cr * cy, cr * sp * sy - sr * cy],
-            [-sp, sr * cp, cr * cp],
-        ]
-    )
-    body = R.T @ (np.asarray(pad) - np.asarray(truth.position_ned))
-    f.link.send_landing_target(
-        *map(float, body),
-        time_usec=int(f.obs.boot_s * 1e6),
-        distance=float(np.linalg.norm(body)),
-    )
 
 
 # ---------------------------------------------------------------------- readiness
@@ -133,7 +112,7 @@ def test_precland_announces_found_init_and_lost_and_descends(vehicle: Flight) ->
     mark = f.obs.text_count
     assert f.link.land().ok
     while true_alt(f, start[2]) > 2.5:
-        send_target(f, pad)
+        send_landing_target(f, pad)
         f.wait_sim(0.1)
         assert f.link.telemetry.armed
     # the pad leaves the view at 2.5 m: no rangefinder, so no retry: it descends

@@ -5,11 +5,10 @@ from __future__ import annotations
 import math
 import time
 
-import numpy as np
 import pytest
 
 from backend.link import VehicleLink
-from tests.sitl.support import Flight, horizontal, requires_sitl
+from tests.sitl.support import Flight, horizontal, requires_sitl, send_landing_target
 
 pytestmark = [pytest.mark.sitl, requires_sitl]
 
@@ -117,31 +116,6 @@ def test_sim_gps_disable_takes_the_fix_away_and_back(flight: Flight) -> None:
     assert flight.wait_until(lambda t: t.gps is not None and t.gps.fix_type >= 3, 20)
 
 
-def _landing_target(flight: Flight, pad: tuple[float, float], ground_d: float) -> None:
-    """LANDING_TARGET (BODY_FRD) of a pad at ``pad`` (NE) on the ground, from the truth."""
-    truth = flight.obs.truth(flight.origin())
-    assert truth is not None and flight.obs.boot_s is not None
-    cr, sr = math.cos(truth.roll), math.sin(truth.roll)
-    cp, sp = math.cos(truth.pitch), math.sin(truth.pitch)
-    cy, sy = math.cos(truth.yaw), math.sin(truth.yaw)
-    R = np.array(
-        [
-            [cp * cy, sr * sp * cy - cr * sy, cr * sp * cy + sr * sy],
-            [cp * sy, sr * sp * sy + cr * cy, cr * sp * sy - sr * cy],
-            [-sp, sr * cp, cr * cp],
-        ]
-    )
-    rel = np.array([pad[0], pad[1], ground_d]) - np.array(truth.position_ned)
-    body = R.T @ rel
-    flight.link.send_landing_target(
-        float(body[0]),
-        float(body[1]),
-        float(body[2]),
-        time_usec=int(flight.obs.boot_s * 1e6),
-        distance=float(np.linalg.norm(body)),
-    )
-
-
 def test_reboot_drops_tcp_the_link_comes_back_and_plnd_type_takes_effect(flight: Flight) -> None:
     link, obs = flight.link, flight.obs
     flight.set_param("PLND_ENABLED", 1)
@@ -158,7 +132,7 @@ def test_reboot_drops_tcp_the_link_comes_back_and_plnd_type_takes_effect(flight:
     assert link.land().ok
     while link.telemetry.armed:
         if -(flight.true_ned()[2] - start[2]) > 0.4:
-            _landing_target(flight, pad, start[2])
+            send_landing_target(flight, (pad[0], pad[1], start[2]))
         flight.wait_sim(0.1)
         assert (obs.boot_s or 0) < 400
     texts = [t.text for t in obs.texts(texts_from)]

@@ -27,23 +27,19 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from backend.missions import LandConfig, LandMission
 from bench.scenarios.land import PAD_NE, RunSpec, camera_config, fly, fly_to_start
 from bench.scenarios.observed import ObservedDriver
-from tests.sitl.support import Flight, assert_landed_blind, requires_sitl, start_flight
+from tests.sitl.support import SITL_KIND, Flight, assert_landed_blind, running_flight
 
 pytestmark = pytest.mark.slow
 
-KINDS = [pytest.param("sitl", id="sitl", marks=[pytest.mark.sitl, requires_sitl])]
+KINDS = [SITL_KIND]
 
 SPEC = RunSpec(0, 3, "plnd", 30.0, PAD_NE[0] + 0.8, PAD_NE[1] + 0.4, 4.0, 30.0, 0, 0, 0, 28.0)
 
 
 @pytest.fixture(params=KINDS)
 def vehicle(request: pytest.FixtureRequest) -> Iterator[Flight]:
-    sitl, flight = start_flight(request.param)
-    try:
+    with running_flight(request.param) as flight:
         yield flight
-    finally:
-        flight.close()
-        sitl.stop()
 
 
 def _set_by_another_gcs(f: Flight, name: str, value: float) -> None:

@@ -9,22 +9,18 @@ from collections.abc import Iterator
 
 import pytest
 
-from tests.sitl.support import Flight, requires_sitl, start_flight
+from tests.sitl.support import SITL_KIND, Flight, running_flight
 
 KINDS = [
     pytest.param("standin", id="standin", marks=pytest.mark.slow),
-    pytest.param("sitl", id="sitl", marks=[pytest.mark.sitl, requires_sitl]),
+    SITL_KIND,
 ]
 
 
 @pytest.fixture(params=KINDS)
 def vehicle(request: pytest.FixtureRequest) -> Iterator[Flight]:
-    sitl, flight = start_flight(request.param)
-    try:
+    with running_flight(request.param) as flight:
         yield flight
-    finally:
-        flight.close()
-        sitl.stop()
 
 
 def test_a_reboot_resets_what_the_vehicle_said(vehicle: Flight) -> None:

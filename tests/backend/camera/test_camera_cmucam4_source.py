@@ -14,6 +14,7 @@ from backend.camera.cmucam4 import CMUcam4Error, CMUcam4Source, TPacket
 from backend.camera.rgb565 import decode_rgb565, encode_rgb565
 from sim.camera import PadRenderer, SimCameraConfig, VehiclePose
 from sim.cmucam4 import CMUcam4Board, Faults
+from tests.polling import wait_until
 
 pytestmark = [pytest.mark.timeout(40), pytest.mark.usefixtures("no_leftover_threads")]
 SCALE = 0.02
@@ -44,16 +45,6 @@ def rig() -> Iterator[Callable[..., tuple[CMUcam4Board, CMUcam4Source]]]:
     yield make
     for thing in reversed(made):
         thing.close()
-
-
-def wait_until(pred, timeout: float = 5.0) -> bool:
-    """Poll ``pred`` until it is true or ``timeout`` s pass (threads need scheduling)."""
-    deadline = time.monotonic() + timeout
-    while not pred():
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.02)
-    return True
 
 
 def picture(seed: int = 0) -> np.ndarray:

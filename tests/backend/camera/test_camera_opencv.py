@@ -13,18 +13,9 @@ import pytest
 
 from backend.camera import Frame, FrameSource, open_source
 from backend.camera.opencv_source import OpenCVSource
+from tests.polling import wait_until
 
 pytestmark = [pytest.mark.timeout(30), pytest.mark.usefixtures("no_leftover_threads")]
-
-
-def wait_until(pred, timeout: float = 5.0) -> bool:
-    """Poll ``pred`` until it is true or ``timeout`` s pass (threads need scheduling)."""
-    deadline = time.monotonic() + timeout
-    while not pred():
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.02)
-    return True
 
 
 def write_video(path: Path, n: int = 12, size: tuple[int, int] = (64, 48), fps: float = 50.0):
