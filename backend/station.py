@@ -353,9 +353,9 @@ def approach_altitude(reference: Reference | None, camera: Camera) -> float | No
     >>> from pipeline.render import make_pad_image
     >>> pad = Reference.from_image(make_pad_image(400), 0.55)
     >>> approach_altitude(pad, Camera.from_fov(640, 480, 60.0))
-    4.4
+    5.5
     >>> approach_altitude(pad, Camera.from_fov(1280, 720, 60.0))
-    8.7
+    11.1
     """
     if reference is None:
         return None

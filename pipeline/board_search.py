@@ -30,12 +30,13 @@ import numpy as np
 from pipeline.homography_fit import affine_part, fit_homography
 from pipeline.jit import compiled
 from pipeline.measure import pad_box_m
-from pipeline.reference import RELIABLE_H_PX, Reference
+from pipeline.reference import Reference
 from pipeline.shapes import Region
 from pipeline.template import pad_pattern, pattern_box
 
 MIN_BOARD_PX = 12.0  # a board narrower than this (frame pixels) holds too few for its pattern
 MIN_SEED_PX = 3.0  # the H's mark, at least this wide on the view
+MISSED_H_PX = 28.0  # and at most this wide (frame pixels): an H that small may be missed
 MIN_BOARD_CONTRAST = 8.0  # the board against its floor, levels of 0..255
 # ... and against the floor's noise (robust spread around the board, over the contrast):
 # 0.10-0.20 on the bench's far views (15-30 dB), 0.62 grown from a real photo's noise.
@@ -94,7 +95,7 @@ def find_boards(
     # marks whose pad fits in the view, MAX_LARGE_SEEDS of them: an H a glare spoilt
     # (on the real-world mix's views a glare on the H, or a smear joining it to the
     # bars beside it, lost 1-4 of 40 pads per design whose board stood out whole).
-    most = RELIABLE_H_PX * enlarged
+    most = MISSED_H_PX * enlarged
     least = max(MIN_SEED_PX, MIN_BOARD_PX * enlarged / (2.0 * ratio))
     widest = min(levels.shape) / (1.5 * ratio)
     small, large = [], []

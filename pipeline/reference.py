@@ -23,7 +23,7 @@ from pipeline.shape_match import ShapeMatcher
 from pipeline.template import reference_pyramid
 
 H_CORNERS = 12
-RELIABLE_H_PX = 28.0  # an H this many pixels across is found in nearly every frame
+RELIABLE_H_PX = 22.0  # an H this many pixels across is found in nearly every frame
 SEARCH_WIDTH_PX = 640  # frames are searched this wide first (pipeline.frame)
 # Frames are searched at their own resolution last (pipeline.frame); the range that buys
 # was measured on frames up to this wide (bench --sweep altitude): wider ones count as it.
@@ -196,16 +196,21 @@ class Reference:
         pixels (a camera over ``MEASURED_WIDTH_PX`` wide counted as that wide), looking
         straight down: where missions can expect to find the pad.
 
-        On the bench's frames the default pad is found in every frame up to where its
-        H spans 13 px, at 640 x 480 as at 1280 x 720 (12 and 24 m); thin strokes need
-        more (a 9 % leg: 14 of 15 frames at 25 px). ``min_h_px`` keeps a margin for both.
+        On the altitude sweep's frames the default pad is found in every frame up to
+        16 m at 640 x 480 and 24 m at 1280 x 720, where its H spans 9.5 and 12.6 px.
+        Where their H's span 22 px (20 frames a design and camera, the attitude hint
+        given), every bench design's pad was found in 20, but red_on_black's in 19 at
+        1280 x 720 and grass_paint's (an H painted on grass, with no board) in 16 at
+        both, 18-19 at 28 px. At 1920 x 1080 an H of thin strokes at 28 px was found in
+        14 of 16 frames (16 at 1280 x 720): a frame that wide is enlarged a third, not
+        doubled (`pipeline.frame`), hence wider cameras counted as 1280 px.
 
         >>> from pipeline.render import make_pad_image
         >>> ref = Reference.from_image(make_pad_image(400), 0.55)
         >>> round(ref.reliable_altitude_m(Camera.from_fov(640, 480, 60.0)), 1)
-        5.4
+        6.9
         >>> round(ref.reliable_altitude_m(Camera.from_fov(1280, 720, 60.0)), 1)
-        10.9
+        13.9
         """
         fx = camera.fx * min(1.0, MEASURED_WIDTH_PX / camera.width)
         return fx * self.h_size_m / min_h_px
