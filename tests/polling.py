@@ -1,4 +1,4 @@
-"""Waiting on something a background thread does, for the tests of capture and board threads."""
+"""Waiting on what a background thread does (capture, board and link threads)."""
 
 from __future__ import annotations
 

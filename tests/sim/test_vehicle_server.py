@@ -19,6 +19,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from sim.vehicle import SimConfig, SimVehicle, VehicleServer
 from sim.vehicle.physics import ned_to_body
+from tests.polling import wait_until
 
 GUIDED, LOITER, RTL, LAND = 4, 5, 6, 9
 CUSTOM = mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
@@ -628,23 +629,14 @@ def test_target_is_lost_two_seconds_after_the_last_measurement(rig: Rig) -> None
 
 
 # ---------------------------------------------------------------------- robustness
-def _wait(predicate, timeout: float = 10.0) -> bool:
-    """Poll ``predicate`` until it holds (the server's reader thread is its own)."""
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.005)
-    return True
-
-
 def test_garbage_and_truncated_packets_do_not_break_the_link(rig: Rig) -> None:
     sock = rig.m.port
     sock.sendall(os.urandom(3000))
     good = rig.m.mav.param_request_read_encode(1, 1, b"SYSID_MYGCS", -1).pack(rig.m.mav)
     sock.sendall(b"\xfd\x09\x00" + good[:7])  # a truncated frame, then noise
     sock.sendall(bytes(range(256)))
-    assert _wait(lambda: rig.server.bad_packets > 0)  # parsed by the server's reader
+    # (parsed by the server's reader thread, its own)
+    assert wait_until(lambda: rig.server.bad_packets > 0, 10.0)
     rig.server.advance(0.05)
     assert rig.server.running
     # A fresh connection is served normally.
@@ -771,7 +763,7 @@ def test_signed_link_ignores_unsigned_commands() -> None:
     m = mavutil.mavlink_connection(server.address, source_system=255, autoreconnect=False)
     try:
         m.mav.param_request_read_send(1, 1, b"SYSID_MYGCS", -1)
-        assert _wait(lambda: server.bad_packets >= 1)  # the unsigned request, dropped
+        assert wait_until(lambda: server.bad_packets >= 1, 10.0)  # the unsigned request, dropped
         server.advance(0.2)
         assert server.messages_received == 0
         m.setup_signing(key, sign_outgoing=True)
