@@ -56,6 +56,9 @@ SMALL_H_PX = 14.0  # an H this small counts only with the rest of its pad found
 # (10-20 m), true pads' came to 0.69-0.92 (most over 0.78), clear look-alikes' (an H's
 # evidence over MIN_EVIDENCE) to 0.72 at most.
 MIN_PAD_NCC = 0.78
+# An H is told from a smaller H of the reference's by what lies around it, out to this
+# share of its size, matching the one's surroundings better by this much.
+LESSER_CONTEXT, LESSER_MARGIN = 0.5, 0.05
 BARE_H_PX = 32.0  # the same for a dark H on a plain light board (`_framed_below_px`)
 # Evidence (candidates.Located.evidence) at which an H needs no check that it stands out
 # from its board: on the bench, no look-alike or texture reaching it stood out less than
@@ -366,6 +369,20 @@ def _check(
     # nan (a patch too small to compare, a board too dark for a hue) passes.
     if seen.ncc < MIN_TEMPLATE_NCC:
         return "unlike"
+    # A pad whose picture holds smaller H's in its paint (the letter H of a "HELIPAD"
+    # beside its H) shows one wherever its H is hidden or spoilt, on the same board,
+    # and taken for the H it puts the pad several times too far. Its surroundings tell
+    # it, the letters beside it: over its box grown by half its size, the pattern's
+    # correlation read 0.67-0.76 as the pad's H, 0.90-0.97 as the letter; the pad's
+    # own H's read 0.03-0.5 better as the H. On probe pads with text by their H
+    # ("HELIPAD" under it, "HOSPITAL" over it, "HELI" in large letters), their H
+    # erased, letters passed every check above in 6, 1 and 12 of 30 views of the
+    # real-world mix (9, 0 and 0 of 30 clean), posed 4-9 times too far; so checked, in
+    # 0, 0 and 1. The pads themselves were posed right in 27, 23 and 23 of those 30
+    # views, against 26, 24 and 23. (Smaller copies of the H on a plain board, as in a
+    # pad's corners, have the H's surroundings: this does not tell them.)
+    if reference.lesser_hs and _lesser_h_likelier(hit, binary, reference):
+        return "unlike"
     # Light that saturates the paint lifts the board's level against it; a pattern
     # that matches the reference's almost exactly around the H vouches for the board,
     # and so do the pad's other marks found around an H not small (as above; on the
@@ -401,6 +418,35 @@ def _marks_found_around(hit: Located, binary: Binarized, reference: Reference) -
     """The share of the pad's other marks found around the located H, its homography
     refitted on them (`pipeline.measure.pad_marks`; 0 when they were not found)."""
     return pad_marks(hit.fit.H, reference, binary.smooth, any_size=True)[1]
+
+
+def _lesser_h_likelier(hit: Located, binary: Binarized, reference: Reference) -> bool:
+    """Whether what lies around the H matches the picture around one of its smaller
+    H's (`Reference.lesser_hs`, in either reading) better than around its H, by
+    ``LESSER_MARGIN``."""
+    own = _context_ncc(hit.fit.H, binary, reference, reference.corners_m)
+    for S in reference.lesser_h_maps:
+        # (were the H that one, the pad would lie where H S^-1 puts it)
+        pad = hit.fit.H @ np.linalg.inv(S)
+        other = _context_ncc(pad, binary, reference, apply_h(S, reference.corners_m))
+        if other > own + LESSER_MARGIN:  # (nan, either: too little in view to tell)
+            return True
+    return False
+
+
+def _context_ncc(
+    H: np.ndarray, binary: Binarized, reference: Reference, corners_m: np.ndarray
+) -> float:
+    """The frame's channel against the reference's around an H of the reference
+    (``corners_m``) put in the view by ``H``: over its box grown by ``LESSER_CONTEXT``
+    of its size (nan when too little of it is in view, or too much)."""
+    lo, hi = corners_m.min(axis=0), corners_m.max(axis=0)
+    grow = LESSER_CONTEXT * float((hi - lo).max())
+    (x0, y0), (x1, y1) = lo - grow, hi + grow
+    box = np.array([[x0, y1], [x1, y1], [x1, y0], [x0, y0]])
+    return pad_pattern(
+        binary.smooth, reference.template_pyramid, reference.channel_px_per_m, box, H
+    )
 
 
 def _framed_below_px(reference: Reference) -> float:

@@ -34,6 +34,8 @@ _WORK_MAX = 1024  # pictures are measured at up to this many pixels a side
 _LEVELS = 9  # thresholds tried per channel between its 2nd and 98th percentiles
 _MIN_H_AREA = 0.002  # of the picture: smaller marks are text or noise, not the pad's H
 _MAX_H_AREA = 0.6
+_LESSER_MIN_PX = 8  # a mark narrower than this (work pixels) is not read as an H
+_MAX_LESSER_LOOKS = 64
 _MAX_CUT_SHAPES = 32  # shapes cut by the picture's edge kept to tell of a cut H
 _MIN_CONTRAST = 25.0  # H against its board on the learned channel, 0..255
 # The picture's border is its board's edge when its levels spread this little (of the
@@ -56,6 +58,9 @@ class Reference:
     ``projection``: the colour channel in which the H is bright and its board
     dark (frames are searched on it). ``contrast``: H minus board on that
     channel. ``leg_fraction``: the thinner leg's width over the H's width.
+    ``lesser_hs``: the corners of the smaller marks of the H's paint shaped as an H
+    (the letter H of a "HELIPAD" painted beside it): where the pad's H is hidden, one
+    of them may pass for it, the pad posed several times too far (`pipeline.find`).
     """
 
     pad_size_m: float
@@ -77,6 +82,7 @@ class Reference:
     channel_px_per_m: float
     paint_bgr: tuple[float, float, float]  # the H's colour on the picture (median)
     board_bgr: tuple[float, float, float]  # its board's, right around it
+    lesser_hs: tuple[np.ndarray, ...] = ()  # smaller H's in its paint (12 corners, metres)
 
     @cached_property
     def edge_model(self) -> EdgeModel:
@@ -159,6 +165,24 @@ class Reference:
         out = np.zeros(len(pts), bool)
         out[inside] = self.mask[v[inside], u[inside]] > 0
         return out
+
+    @cached_property
+    def lesser_h_maps(self) -> tuple[np.ndarray, ...]:
+        """Affine maps (3 x 3, pad metres -> pad metres) that put the H's corners on
+        each of ``lesser_hs``: the two likeliest readings of each, its 12 corners
+        taken from the two starts that fit best (an H read half a turn round fits
+        about as well)."""
+        src = np.column_stack([self.corners_m, np.ones(len(self.corners_m))])
+        out = []
+        for corners in self.lesser_hs:
+            fits = []
+            for shift in range(len(corners)):
+                dst = np.roll(corners, -shift, axis=0)
+                A, *_ = np.linalg.lstsq(src, dst, rcond=None)
+                fits.append((float(np.sum((src @ A - dst) ** 2)), A))
+            for _, A in sorted(fits, key=lambda f: f[0])[:2]:
+                out.append(np.vstack([A.T, [0.0, 0.0, 1.0]]))
+        return tuple(out)
 
     @cached_property
     def h_centre_m(self) -> np.ndarray:
@@ -317,6 +341,7 @@ class Reference:
             board_bgr=_median_bgr(work, board_mask),
             channel=channel,
             channel_px_per_m=ww / pad_size_m,
+            lesser_hs=tuple(to_m(c) for c in _lesser_hs(mask, region)),
         )
 
     def to_dict(self) -> dict:
@@ -335,6 +360,7 @@ class Reference:
             "projection": self.projection.to_dict(),
             "contrast": self.contrast,
             "leg_fraction": self.leg_fraction,
+            "lesser_hs": [c.tolist() for c in self.lesser_hs],
         }
 
 
@@ -454,6 +480,29 @@ def _refit(mask: np.ndarray, region: np.ndarray, fit: HFit) -> HFit:
     if again is None:
         return fit
     return dataclasses.replace(again, corners=again.corners + np.array([x0 - 2, y0 - 2]))
+
+
+def _lesser_hs(mask: np.ndarray, region: np.ndarray) -> list[np.ndarray]:
+    """The corners (pixels) of the marks of ``mask`` (the H's paint) besides the H's
+    ``region`` that are smaller than it and shaped as an H (looked for among the
+    ``_MAX_LESSER_LOOKS`` largest)."""
+    _, labels, stats, _ = cv2.connectedComponentsWithStats((mask > 0).astype(np.uint8))
+    ys, xs = np.nonzero(region)
+    h_box = max(xs.max() - xs.min(), ys.max() - ys.min()) + 1
+    own = set(np.unique(labels[region]).tolist())
+    out: list[np.ndarray] = []
+    looked = 0
+    for k in np.argsort(-stats[:, cv2.CC_STAT_AREA]):
+        x, y, w, h, _a = stats[k]
+        if k == 0 or k in own or min(w, h) < _LESSER_MIN_PX or max(w, h) >= h_box:
+            continue
+        looked += 1
+        if looked > _MAX_LESSER_LOOKS:
+            break
+        fit = fit_h(_framed(labels[y : y + h, x : x + w] == k))
+        if fit is not None:
+            out.append(fit.corners + np.array([x - 2, y - 2]))
+    return out
 
 
 def _h_and_board(region: np.ndarray, fit: HFit) -> tuple[np.ndarray, np.ndarray]:
