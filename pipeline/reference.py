@@ -297,6 +297,11 @@ class Reference:
         smooth = cv2.GaussianBlur(channel, (5, 5), 1.0)
         h_contrast = contrast(smooth, h_mask, board_mask)
         if h_contrast < _MIN_CONTRAST:
+            if _outlined(work, region):
+                raise ValueError(
+                    "the H is drawn as an outline, its inside the board's colour: Visland "
+                    "finds an H painted solid (fill the H in on the picture and on the pad)"
+                )
             raise ValueError(
                 f"the H barely stands out from its board (contrast {h_contrast:.0f} of 255): "
                 "take the picture in even light, straight from above"
@@ -480,6 +485,18 @@ def _refit(mask: np.ndarray, region: np.ndarray, fit: HFit) -> HFit:
     if again is None:
         return fit
     return dataclasses.replace(again, corners=again.corners + np.array([x0 - 2, y0 - 2]))
+
+
+def _outlined(work: np.ndarray, region: np.ndarray) -> bool:
+    """Whether the H-shaped ``region`` is the inside of an outline: a band right around
+    it stands out from it (on gray or any colour) as its board beyond does not."""
+    reg = region.astype(np.uint8)
+    band = (cv2.dilate(reg, _disc(4)) > 0) & ~(cv2.dilate(reg, _disc(1)) > 0)
+    inside = cv2.erode(reg, _disc(2)) > 0
+    if not band.any() or not inside.any():
+        return False
+    step = np.abs(np.median(work[band], axis=0) - np.median(work[inside], axis=0))
+    return bool(step.max() >= 2 * _MIN_CONTRAST)
 
 
 def _lesser_hs(mask: np.ndarray, region: np.ndarray) -> list[np.ndarray]:

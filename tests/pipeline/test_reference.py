@@ -105,6 +105,20 @@ def test_a_picture_cropped_into_its_h_says_so():
     Reference.from_image(pad[300 - half - 20 : 300 + half + 20], 0.55)  # (the whole H: taken)
 
 
+def test_an_h_drawn_as_an_outline_is_refused_as_one():
+    # (its inside, the board's colour, is the H-shaped region found: "barely stands
+    # out from its board" would send the operator to take the picture again)
+    solid = np.zeros((600, 600), np.uint8)
+    solid[100:500, 140:220] = solid[100:500, 380:460] = solid[260:340, 140:460] = 255
+    outline = cv2.morphologyEx(solid, cv2.MORPH_GRADIENT, np.ones((13, 13), np.uint8))
+    picture = np.full((600, 600, 3), 70, np.uint8)
+    picture[outline > 0] = 245
+    with pytest.raises(ValueError, match="the H is drawn as an outline"):
+        Reference.from_image(picture, 1.0)
+    picture[solid > 0] = 245  # filled in: taken
+    assert Reference.from_image(picture, 1.0).polarity == "bright"
+
+
 @pytest.mark.parametrize("kind", ["rectangle", "II", "letter", "cross", "h_no_bar"])
 def test_lookalikes_are_not_taken_for_an_h(kind):
     mask = make_lookalike(kind, 300, np.random.default_rng(3))
