@@ -1,11 +1,13 @@
-"""A letter H painted beside the pad's H (its "HELIPAD") is not taken for the pad.
+"""A letter H painted beside the pad's H (its "HELIPAD"), or a small copy of the H, is
+not taken for the pad.
 
 Where the pad's H is hidden or spoilt, the letter passes every check of an H's own:
 same paint, same board, an H's shape. Taken for the H, it poses the pad several
 times too far (a probe pad's letter, its H erased, was found in 9 of 30 clean views
 and posed up to 9 times the altitude). The reference learns where its picture holds
 such smaller H's, and a frame's H whose surroundings match a letter's better than the
-H's is refused (``find._lesser_h_likelier``).
+H's is refused; where they match both alike, the pad's marks must be found around it
+(``find._lesser_h_likelier``).
 """
 
 from __future__ import annotations
