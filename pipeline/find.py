@@ -36,7 +36,7 @@ from pipeline.preprocess import Binarized, binarize_channel
 from pipeline.reference import Reference
 from pipeline.shapes import Region, regions
 from pipeline.strokes import cut_through, stroke_samples
-from pipeline.template import compare, pad_pattern
+from pipeline.template import compare, pad_pattern, pattern_box
 
 MIN_TEMPLATE_NCC = 0.4  # with the reference picture around the H
 BOARD_TOLERANCE = 0.2  # the board's brightness relative to the H's, against the reference's
@@ -459,10 +459,7 @@ def _context_ncc(
     """The frame's channel against the reference's around an H of the reference
     (``corners_m``) put in the view by ``H``: over its box grown by ``LESSER_CONTEXT``
     of its size (nan when too little of it is in view, or too much)."""
-    lo, hi = corners_m.min(axis=0), corners_m.max(axis=0)
-    grow = LESSER_CONTEXT * float((hi - lo).max())
-    (x0, y0), (x1, y1) = lo - grow, hi + grow
-    box = np.array([[x0, y1], [x1, y1], [x1, y0], [x0, y0]])
+    box = pattern_box(corners_m, LESSER_CONTEXT)
     return pad_pattern(
         binary.smooth, reference.template_pyramid, reference.channel_px_per_m, box, H
     )

@@ -244,12 +244,12 @@ def _crop(image: np.ndarray, x0: int, y0: int, x1: int, y1: int, dsize) -> np.nd
     return crop
 
 
-def pattern_box(corners_m: np.ndarray) -> np.ndarray:
-    """Where the pattern is compared: the H's bounding box grown by ``MARGIN`` of its
+def pattern_box(corners_m: np.ndarray, margin: float = MARGIN) -> np.ndarray:
+    """Where the pattern is compared: the H's bounding box grown by ``margin`` of its
     size (4 x 2, pad metres)."""
     lo, hi = corners_m.min(axis=0), corners_m.max(axis=0)
     size = float((hi - lo).max())
-    return _box(lo - MARGIN * size, hi + MARGIN * size)
+    return _box(lo - margin * size, hi + margin * size)
 
 
 def _box(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
