@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import heapq
 import math
 from dataclasses import dataclass
 from functools import cached_property
@@ -37,6 +38,12 @@ _MAX_H_AREA = 0.6
 _LESSER_MIN_PX = 8  # a mark narrower than this (work pixels) is not read as an H
 _MAX_LESSER_LOOKS = 64
 _MAX_CUT_SHAPES = 32  # shapes cut by the picture's edge kept to tell of a cut H
+# A region with this share of the H's area beyond its fitted block H (grown by a quarter
+# of a leg) is the H run into another mark of its paint: serifs and rounded ends leave
+# 0.00-0.03 of it, a ring the H's legs cross 0.30. Frames show the two as one shape,
+# no H's: such a pad was found from afar by its board alone, never within 4 m of it.
+_MAX_BEYOND_H = 0.15
+_MAX_TOUCH_LOOKS = 8  # shapes not an H opened (thin marks cut off) to tell of a touching H
 _MIN_CONTRAST = 25.0  # H against its board on the learned channel, 0..255
 # The picture's border is its board's edge when its levels spread this little (of the
 # contrast): 0.01-0.02 on square boards and sheets, 0.09-0.35 on discs and paint on grass.
@@ -398,6 +405,8 @@ def _find_h(work: np.ndarray) -> tuple[HFit, np.ndarray] | str:
     best: tuple[float, float, HFit, np.ndarray] | None = None
     shapes = 0
     seen: set[tuple[int, int, int, int]] = set()
+    untold: list[tuple[int, int, np.ndarray]] = []  # the largest shapes no H was fitted to
+    touching = False  # an H was fitted to a shape with another mark run into it
     cut: dict[tuple[int, int, int, int], np.ndarray] = {}  # shapes the picture's edge cuts
     for _name, chan in _channels(work):
         lo, hi = np.percentile(chan, [2, 98])
@@ -425,6 +434,12 @@ def _find_h(work: np.ndarray) -> tuple[HFit, np.ndarray] | str:
                 region = labels[y : y + h, x : x + w] == k
                 fit = fit_h(_framed(region))
                 if fit is None:
+                    heapq.heappush(untold, (int(a), shapes, region))
+                    if len(untold) > _MAX_TOUCH_LOOKS:
+                        heapq.heappop(untold)  # (the smallest)
+                    continue
+                if _beyond_h(region, fit.corners - 2.0, min(fit.leg_widths)) > _MAX_BEYOND_H:
+                    touching = True
                     continue
                 fit = HFit(
                     corners=fit.corners + np.array([x - 2, y - 2]),
@@ -448,6 +463,13 @@ def _find_h(work: np.ndarray) -> tuple[HFit, np.ndarray] | str:
                 "the H touches the picture's edge: crop the picture to the pad's outer "
                 "edge, with the whole H inside it"
             )
+        if touching or any(_opened_h(region) for _, _, region in untold):
+            return (
+                "the H runs into another mark of its paint (a ring or a frame touching "
+                "it): a frame shows the two as one shape, no H's. Visland finds an H "
+                "standing clear of its pad's other marks: leave a gap of the board's "
+                "colour between them, on the pad and on its picture"
+            )
         if shapes == 0:
             return (
                 "no shape stands out on the picture: expected a pad whose H contrasts "
@@ -458,6 +480,35 @@ def _find_h(work: np.ndarray) -> tuple[HFit, np.ndarray] | str:
             "channels, none has the two legs and crossbar of an H"
         )
     return best[2], best[3]
+
+
+def _beyond_h(region: np.ndarray, corners: np.ndarray, leg: float) -> float:
+    """The share of the block H's area (``corners``, the region's box pixels) that the
+    region covers beyond it, the H grown by a quarter of its ``leg`` for serifs and blur."""
+    poly = np.zeros(region.shape, np.uint8)
+    cv2.fillPoly(poly, [np.round(corners).astype(np.int32)], 1)
+    grown = cv2.dilate(poly, _disc(max(1, round(0.25 * leg))))
+    return np.count_nonzero(region & (grown == 0)) / max(np.count_nonzero(poly), 1)
+
+
+def _opened_h(region: np.ndarray) -> bool:
+    """Whether an H stands out of a shape (bool, its box) once its thinner parts are
+    cut off (opened by discs of 2-6 % of its size): an H whose legs touch a ring or
+    a frame painted round it."""
+    size = max(region.shape)
+    for share in (0.02, 0.04, 0.06):
+        r = round(share * size)
+        if r < 2:
+            continue
+        opened = cv2.morphologyEx(region.astype(np.uint8), cv2.MORPH_OPEN, _disc(r))
+        n, labels, stats, _ = cv2.connectedComponentsWithStats(opened)
+        if n < 2:
+            continue
+        k = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+        x, y, w, h, _a = stats[k]
+        if min(w, h) >= 8 and fit_h(_framed(labels[y : y + h, x : x + w] == k)) is not None:
+            return True
+    return False
 
 
 def _framed(region: np.ndarray) -> np.ndarray:
