@@ -1,4 +1,4 @@
-"""Uploaded pictures: what format they are, decoding them, marking the H's corners."""
+"""Uploaded pictures: what format they are, decoding them, drawing what a reference learned."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import numpy as np
 
 from backend.image_header import BadHeader, ImageHeader, read_header
 from pipeline.picture import decode_picture
+from pipeline.reference import Reference
 
 
 class UnsupportedImage(ValueError):
@@ -70,6 +71,27 @@ def _over_budget(header: ImageHeader, max_pixels: int) -> str:
         f"The picture is {header.width} x {header.height} pixels ({size} MP), over {limit}: "
         "scale it down (the pad needs far fewer)."
     )
+
+
+MARK_BGR = (255, 200, 0)  # the pad's other marks (rings, rims, bars)
+LETTER_BGR = (255, 0, 255)  # smaller H's in the H's paint, told apart from it
+
+
+def draw_reference(reference: Reference) -> np.ndarray:
+    """The reference's picture with what it learned drawn on it: its other marks, the
+    smaller H's it tells apart from its own (a "HELIPAD"'s letter), and the H's
+    corners numbered in their order."""
+    out = reference.image.copy()
+    width = max(2, round(3 * max(out.shape[:2]) / 800.0))
+    # (pad metres -> picture pixels: the affine map that carries the H's corners)
+    m_h = np.column_stack([reference.corners_m, np.ones(len(reference.corners_m))])
+    to_px, *_ = np.linalg.lstsq(m_h, np.asarray(reference.corners_px, float), rcond=None)
+    polygons = [(m.corners_m, MARK_BGR) for m in reference.marks]
+    polygons += [(c, LETTER_BGR) for c in reference.lesser_hs]
+    for corners_m, colour in polygons:
+        px = np.column_stack([corners_m, np.ones(len(corners_m))]) @ to_px
+        cv2.polylines(out, [np.round(px).astype(np.int32)], True, colour, width, cv2.LINE_AA)
+    return draw_corners(out, reference.corners_px)
 
 
 def draw_corners(image_bgr: np.ndarray, corners_px: np.ndarray) -> np.ndarray:

@@ -187,6 +187,14 @@ class ReferenceSummary(Model):
     orientation_deg: float | None
     eccentricity: float | None
     symmetric: bool
+    marks: int = Field(
+        description="the pad's other marks found on the picture (rims, rings, bars, stars): "
+        "the pose is fitted to their edges too"
+    )
+    letter_hs: int = Field(
+        description="smaller H's in the H's paint (the H of a painted HELIPAD): a frame's H "
+        "that reads as one of them is not taken for the pad's"
+    )
     image_size: tuple[int, int]
     images: ReferenceImages
     verifier: VerifierStatus

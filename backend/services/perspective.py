@@ -25,7 +25,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from backend.imaging import draw_corners
+from backend.imaging import draw_reference
 from backend.services.references import NoUsableH, ReferenceService
 from pipeline import Reference
 from pipeline.rectify import Outline, rectify, suggest_outline
@@ -136,7 +136,7 @@ class PerspectiveDrafts:
         preview_id = secrets.token_hex(6)
         if not cv2.imwrite(str(draft.folder / f"{preview_id}.png"), flat) or not cv2.imwrite(
             str(draft.folder / f"{preview_id}-corners.png"),
-            draw_corners(reference.image, reference.corners_px),
+            draw_reference(reference),
         ):
             raise OSError("the rectified picture could not be kept on disk")
         preview = {

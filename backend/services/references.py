@@ -21,7 +21,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from backend.imaging import decode_image, draw_corners
+from backend.imaging import decode_image, draw_reference
 from backend.services.events import EventLog
 from backend.storage import Storage
 from backend.verifier_training import VerifierStatus, VerifierTrainer
@@ -209,6 +209,9 @@ class ReferenceService:
             "orientation_deg": data["orientation_deg"],
             "eccentricity": data["eccentricity"],
             "symmetric": data["symmetric"],
+            # (references stored before these were learned have none)
+            "marks": len(data.get("marks", ())),
+            "letter_hs": len(data.get("lesser_hs", ())),
             "image_size": data["image_size"],
             "images": {k: f"/api/references/{rid}/image/{k}" for k in REFERENCE_IMAGES},
             "verifier": self.trainer.status(rid).to_dict(),
@@ -258,7 +261,7 @@ def _write_images(folder: Path, reference: Reference) -> None:
     for name, picture in (
         ("original", image),
         ("threshold", mask),
-        ("corners", draw_corners(image, reference.corners_px)),
+        ("corners", draw_reference(reference)),
     ):
         if not cv2.imwrite(str(folder / f"{name}.png"), picture):
             raise OSError(f"could not write {folder / name}.png")

@@ -12,6 +12,7 @@ import re
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from tests.e2e.support import (
@@ -111,6 +112,19 @@ def test_reference_upload_shows_corners(page, station: Station, tmp_path: Path) 
     assert all(x is not None and abs(x) <= 0.3 + 1e-9 for x in xs), xs
     active = station.get("/api/reference")[1]
     assert active["name"].startswith("my-pad") and active["pad_size_m"] == pytest.approx(0.6)
+    meta = page.get_by_test_id("reference-meta")
+    expect(meta).to_contain_text("3 other marks")  # (its rim and two side bars)
+    expect(meta).not_to_contain_text("smaller H")
+    # A pad with a painted HELIPAD: the letter H it tells apart from its own is said.
+    paint = (170, 60, 20)
+    pad = np.full((800, 800, 3), 235, np.uint8)
+    pad[130:590, 210:305] = pad[130:590, 495:590] = pad[315:405, 210:590] = paint
+    cv2.putText(pad, "HELIPAD", (170, 720), cv2.FONT_HERSHEY_SIMPLEX, 2.6, paint, 9, cv2.LINE_AA)
+    assert cv2.imwrite(str(picture), pad)
+    page.get_by_test_id("reference-file").set_input_files(str(picture))
+    page.get_by_test_id("reference-size").fill("1.0")
+    page.get_by_test_id("reference-upload").click()
+    expect(meta).to_contain_text("1 smaller H told apart from the pad's", timeout=15_000)
     assert not page.errors, page.errors
 
 

@@ -2024,6 +2024,16 @@ export interface components {
                 number
             ];
             images: components["schemas"]["ReferenceImages"];
+            /**
+             * Letter Hs
+             * @description smaller H's in the H's paint (the H of a painted HELIPAD): a frame's H that reads as one of them is not taken for the pad's
+             */
+            letter_hs: number;
+            /**
+             * Marks
+             * @description the pad's other marks found on the picture (rims, rings, bars, stars): the pose is fitted to their edges too
+             */
+            marks: number;
             /** Name */
             name: string;
             /** Orientation Deg */

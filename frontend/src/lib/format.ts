@@ -44,3 +44,9 @@ export function fmtDate(value: string | number | null | undefined): string {
   const pad = (n: number) => String(n).padStart(2, "0");
   return `${d.getFullYear()}-${pad(d.getMonth() + 1)}-${pad(d.getDate())} ${pad(d.getHours())}:${pad(d.getMinutes())}`;
 }
+
+/** A count and its noun: "1 other mark", "3 other marks"; "—" for an unknown count. */
+export function plural(count: number | null | undefined, noun: string, nouns = `${noun}s`): string {
+  if (count === null || count === undefined || !Number.isFinite(count)) return `— ${nouns}`;
+  return `${count} ${count === 1 ? noun : nouns}`;
+}

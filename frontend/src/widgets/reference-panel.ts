@@ -3,7 +3,7 @@
 // its invariants; pick an earlier reference again.
 
 import { ApiError, describeFailure } from "../lib/api";
-import { fmt, fmtDate, fmtSci } from "../lib/format";
+import { fmt, fmtDate, fmtSci, plural } from "../lib/format";
 import type { ReferenceSummary } from "../lib/protocol";
 import { confirmDialog } from "./confirm-dialog";
 import { type Ctx, h, panel, setText } from "./dom";
@@ -55,12 +55,16 @@ export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
   const meta = h("div", { class: "caption", "data-testid": "reference-meta" });
   const verifierLine = h("div", { class: "caption verifier-line", "data-testid": "reference-verifier" });
   const imgThreshold = h("img", { class: "ref-img", alt: "threshold mask of the reference", "data-testid": "reference-threshold" });
-  const imgCorners = h("img", { class: "ref-img", alt: "corners found on the reference", "data-testid": "reference-corners-img" });
+  const imgCorners = h("img", {
+    class: "ref-img",
+    alt: "the H's corners found on the reference, its other marks in cyan, smaller H's told apart in magenta",
+    "data-testid": "reference-corners-img",
+  });
   const images = h(
     "div",
     { class: "ref-images" },
     h("figure", {}, imgThreshold, h("figcaption", {}, "threshold")),
-    h("figure", {}, imgCorners, h("figcaption", {}, "corners")),
+    h("figure", {}, imgCorners, h("figcaption", {}, "corners · other marks (cyan) · smaller H's (magenta)")),
   );
   const cornersBody = h("tbody", { "data-testid": "reference-corners" });
   const cornersTable = h(
@@ -113,7 +117,9 @@ export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
       meta,
       `pad ${fmt(ref.pad_size_m, 2, "m")} · ${ref.image_size?.[0] ?? "?"}×${ref.image_size?.[1] ?? "?"} px · ` +
         `${ref.corners_m.length} corners · ${ref.symmetric ? "symmetric (180° ambiguity resolved by heading)" : "asymmetric"} · ` +
-        `added ${fmtDate(ref.created)}`,
+        `${plural(ref.marks, "other mark")}` +
+        (ref.letter_hs > 0 ? ` · ${plural(ref.letter_hs, "smaller H", "smaller H's")} told apart from the pad's` : "") +
+        ` · added ${fmtDate(ref.created)}`,
     );
     const key = String(ref.id);
     if (key !== shownId) {

@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { fmt, fmtAge, fmtDate, fmtSci, huLog } from "../../src/lib/format";
+import { fmt, fmtAge, fmtDate, fmtSci, huLog, plural } from "../../src/lib/format";
 
 describe("format", () => {
   it("formats numbers with units and dashes for unknowns", () => {
@@ -32,5 +32,13 @@ describe("format", () => {
     expect(fmtDate(new Date(2026, 0, 2, 3, 4).toISOString())).toBe("2026-01-02 03:04");
     expect(fmtDate("not a date")).toBe("not a date");
     expect(fmtDate(null)).toBe("—");
+  });
+
+  it("counts nouns", () => {
+    expect(plural(1, "other mark")).toBe("1 other mark");
+    expect(plural(0, "other mark")).toBe("0 other marks");
+    expect(plural(2, "smaller H", "smaller H's")).toBe("2 smaller H's");
+    expect(plural(3, "other mark")).toBe("3 other marks");
+    expect(plural(undefined, "other mark")).toBe("— other marks");
   });
 });

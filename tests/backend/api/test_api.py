@@ -281,6 +281,39 @@ def test_upload_list_activate_and_pictures(client):
     assert active_id(client) == default_id
 
 
+def _magenta_pixels(client, summary: dict) -> np.ndarray:
+    """Where the reference's corners picture shows a smaller H told apart (magenta)."""
+    pic = client.get(summary["images"]["corners"])
+    image = cv2.imdecode(np.frombuffer(pic.content, np.uint8), cv2.IMREAD_COLOR)
+    return np.argwhere(np.all(image == (255, 0, 255), axis=2))
+
+
+def test_the_summary_counts_marks_and_letters_and_the_corners_picture_shows_them(client):
+    paint = (170, 60, 20)
+    pad = np.full((800, 800, 3), 235, np.uint8)  # a blue H over a HELIPAD on a light board
+    pad[130:590, 210:305] = pad[130:590, 495:590] = pad[315:405, 210:590] = paint
+    cv2.putText(pad, "HELIPAD", (170, 720), cv2.FONT_HERSHEY_SIMPLEX, 2.6, paint, 9, cv2.LINE_AA)
+    r = upload(client, png(pad), pad_size="1.0", name="helipad.png")
+    assert r.status_code == 201, r.text
+    summary = r.json()
+    assert summary["letter_hs"] == 1 and summary["marks"] >= 7  # (the board's rim, the letters)
+    magenta = _magenta_pixels(client, summary)
+    assert len(magenta) > 100  # the letter H's outline, under the H: HELIPAD's first letter
+    assert magenta[:, 0].min() > 640 and magenta[:, 1].max() < 240, magenta.min(axis=0)
+    r = upload(client, png(make_pad_image(600)), name="plain.png")
+    assert r.json()["letter_hs"] == 0 and r.json()["marks"] == 3  # (its rim, two side bars)
+    assert len(_magenta_pixels(client, r.json())) == 0
+
+
+def test_an_h_run_into_its_ring_is_refused_with_the_reason(client):
+    before = active_id(client)
+    pad = np.full((800, 800, 3), 50, np.uint8)
+    cv2.circle(pad, (400, 400), 280, (245, 245, 245), 30, cv2.LINE_AA)
+    pad[180:621, 230:316] = pad[180:621, 485:571] = pad[360:441, 230:571] = 245
+    assert_sentence(upload(client, png(pad)), 422, "runs into another mark of its paint")
+    assert active_id(client) == before
+
+
 def test_a_pad_on_a_transparent_ground_is_taken(client):
     # A black H on a transparent ground stored as black (as many pictures from the web
     # are): read as colour alone, a black picture with no pad.
