@@ -10,7 +10,8 @@ the board is grown: the pixels nearer the board's level (read around the mark) t
 the floor's level around the board (a board lighter or darker than its floor
 alike), as far as they reach; a board that does not stand out of its floor's noise
 is none. Where they make a quadrilateral of the pad's proportions, the whole pad (H
-and marks) is fitted to the edges inside it from each of its four turns, taken
+and marks) is fitted to the edges inside it from each of its four turns (and from
+each inset border's, where the board may have stopped), taken
 affine (so small, its perspective is noise), and kept when many of its H's sides
 and some of its board's outline are found where the fit puts them, and the picture
 inside matches the reference's.
@@ -21,6 +22,7 @@ same level: `Reference.board_is_outline`) is looked for so.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -314,15 +316,16 @@ def _pad_sized(span: float, mark: float, ratio: float) -> bool:
 def _fit_board(
     levels: np.ndarray, reference: Reference, quad: np.ndarray
 ) -> tuple[float, np.ndarray] | None:
-    """The pad fitted from the quadrilateral in each of its four turns: the best
-    pattern's (NCC, homography), when it is the pad's."""
+    """The pad fitted from the quadrilateral in each of its four turns, taken for each
+    of the board's outlines (`_board_outlines`): the best pattern's (NCC, homography),
+    when it is the pad's."""
     box = pad_box_m(reference)
     h_sides = np.arange(len(reference.edge_model.polygon)) < len(reference.corners_m)
     outline = _outline_sides(reference)
     best: tuple[float, np.ndarray] | None = None
-    for turn in range(4):
+    for inner, turn in itertools.product(_board_outlines(reference), range(4)):
         turned = np.roll(quad, -turn, axis=0)
-        start = cv2.getPerspectiveTransform(box.astype(np.float32), turned.astype(np.float32))
+        start = cv2.getPerspectiveTransform(inner.astype(np.float32), turned.astype(np.float32))
         fit = fit_homography(
             levels, reference.edge_model, start.astype(np.float64), iterations=3, search_px=3.0,
             sides_alike=False,
@@ -344,6 +347,37 @@ def _fit_board(
         ):
             best = (ncc, H)
     return best
+
+
+def _board_outlines(reference: Reference) -> list[np.ndarray]:
+    """Where a board grown around the H may stop (4 x 2 metres, in `pad_box_m`'s order):
+    the pad's outer edge, and each mark that is a quadrilateral around the H. A border
+    band inset in a margin of the board's colour stops it at the band's inner edge where
+    the band stands apart (a glare on it, in 1 of 30 views of a probe pad): taken for
+    the pad's outer edge, that edge posed the pad 13 % too far."""
+    box = pad_box_m(reference)
+    out = [box]
+    for mark in reference.marks:
+        poly = mark.corners_m.astype(np.float32)
+        if mark.rim or len(poly) < 4:
+            continue
+        quad = cv2.approxPolyDP(poly, _QUAD_EPS * cv2.arcLength(poly, True), True).reshape(-1, 2)
+        if (
+            len(quad) != 4
+            or not _FILL[0] <= cv2.contourArea(poly) / max(cv2.contourArea(quad), 1e-12) <= _FILL[1]
+        ):
+            continue
+        if any(
+            cv2.pointPolygonTest(poly, (float(x), float(y)), False) <= 0
+            for x, y in reference.corners_m
+        ):
+            continue
+        # (its corners in the box's order: each the one farthest toward the box's corner)
+        centred = quad - quad.mean(axis=0)
+        order = [int(np.argmax(centred @ corner)) for corner in box]
+        if len(set(order)) == 4:
+            out.append(quad[order].astype(np.float64))
+    return out
 
 
 def _h_pattern(levels: np.ndarray, reference: Reference, H: np.ndarray) -> float:

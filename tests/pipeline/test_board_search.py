@@ -18,11 +18,19 @@ from pipeline import Camera, Reference, process_frame
 from pipeline.bench.frames import SCENE_EVERY, make_scenes, make_view
 from pipeline.bench.hint import gravity_hint
 from pipeline.bench.tally import Tally
-from pipeline.board_search import _floor_and_noise, _outline_sides, _ring_contrast, find_boards
+from pipeline.board_search import (
+    _board_outlines,
+    _clockwise,
+    _fit_board,
+    _floor_and_noise,
+    _outline_sides,
+    _ring_contrast,
+    find_boards,
+)
 from pipeline.candidates import MIN_H_AREA_PX
 from pipeline.homography_fit import apply_h
 from pipeline.preprocess import binarize_channel, border_pixels, to_channel
-from pipeline.render import get_design, make_pad_image
+from pipeline.render import camera_rotation, get_design, make_pad_image, make_scene, render
 from pipeline.render.view import render_view
 from pipeline.shapes import regions
 from pipeline.view import View
@@ -227,3 +235,41 @@ def test_a_faint_rim_is_not_the_outline_a_far_board_must_show():
         key=lambda k: float(np.ptp(marks[k].corners_m, axis=0).max()),
     )
     assert dimmed is not None and np.array_equal(dimmed, ref.edge_model.polygon == 1 + widest)
+
+
+def _inset_border_pad() -> np.ndarray:
+    """A white H on a dark board with a yellow border band inset in a margin of the
+    board's own colour (800 px for 1 m)."""
+    pad = np.full((800, 800, 3), 40, np.uint8)
+    pad[30:770, 30:770] = (0, 200, 255)
+    pad[54:746, 54:746] = 40
+    pad[170:590, 235:315] = pad[170:590, 485:565] = pad[340:420, 235:565] = 250
+    return pad
+
+
+def test_a_board_grown_to_an_inset_border_is_fitted_as_that_border():
+    # A board grown from the H stops at the band's inner edge where the band stands
+    # apart from the margin beyond (a glare on the band did so in 1 of 30 views of the
+    # real-world mix): taken for the pad's outer edge, it posed the pad 13 % too far.
+    reference = Reference.from_image(_inset_border_pad(), 1.0)
+    outlines = _board_outlines(reference)
+    inner = min(outlines, key=lambda o: float(np.ptp(o[:, 0])))
+    assert len(outlines) >= 2 and np.ptp(inner, axis=0) == pytest.approx([0.865, 0.865], abs=0.01)
+    scene = make_scene(_inset_border_pad(), 1.0, rng=np.random.default_rng(4), floor="plain")
+    R = camera_rotation(20.0)
+    position = np.array([0.3, -0.2, 14.0])
+    frame = render(scene, CAM, position, R, rng=np.random.default_rng(5))
+    view = View.enlarged(frame.shape, 1280)
+    levels = binarize_channel(
+        to_channel(view.image(frame), reference.projection), "adaptive"
+    ).smooth
+    # (pad metres -> view pixels, as the camera sees the pad)
+    K = view.camera(CAM).K
+    truth = K @ np.column_stack([R.T[:, 0], R.T[:, 1], -R.T @ position])
+    for outline in (outlines[0], inner):
+        quad = apply_h(truth, outline)
+        fitted = _fit_board(levels, reference, _clockwise(quad))
+        assert fitted is not None
+        span = np.ptp(apply_h(fitted[1], reference.corners_m), axis=0)
+        want = np.ptp(apply_h(truth, reference.corners_m), axis=0)
+        assert span == pytest.approx(want, rel=0.03), (outline.tolist(), span, want)
