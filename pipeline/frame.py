@@ -44,6 +44,7 @@ from pipeline.preprocess import (
     DEFAULT_METHOD,
     METHODS,
     Binarized,
+    Halvings,
     binarize_channel,
     check_image,
     smooth,
@@ -186,12 +187,13 @@ def process_frame(
     far_found: tuple[Binarized, list[Region]] | None = None
     # (the whole frame is searched three ways: its picture and channel made once)
     pictures: dict[View, tuple[np.ndarray, np.ndarray]] = {}
+    halvings: Halvings = []  # (the frame's, shared by its coarser views)
     for way, view, how in _in_turn(tries, tally, image.shape, reference, method):
         if view is None:
             continue
         to_frame = view.to_frame
         if view not in pictures:
-            picture = view.image(image)
+            picture = view.image(image, halvings)
             pictures[view] = (picture, to_channel(picture, reference.projection))
         binary, shapes, hits = search(
             *pictures[view],

@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 
 from pipeline.camera import Camera
-from pipeline.preprocess import shrink
+from pipeline.preprocess import Halvings, shrink
 
 MAX_ENLARGEMENT = 2.0  # interpolating further adds cost, not shape: a leg needs 4-6 px
 
@@ -105,12 +105,15 @@ class View:
             [[1.0 / sx, 0.0, -m[0, 2] / sx], [0.0, 1.0 / sy, -m[1, 2] / sy], [0.0, 0.0, 1.0]]
         )
 
-    def image(self, frame: np.ndarray) -> np.ndarray:
+    def image(self, frame: np.ndarray, halvings: Halvings | None = None) -> np.ndarray:
+        """The view's pixels of ``frame``; ``halvings``: the whole frame's made before
+        (`pipeline.preprocess.shrink`), used and added to by a view of the whole frame."""
         crop = frame[self.y0 : self.y1, self.x0 : self.x1]
         if self.size == (crop.shape[1], crop.shape[0]):
             return crop
         if self.scale < 1.0:
-            return shrink(crop, self.size)
+            whole = crop.shape[:2] == frame.shape[:2]
+            return shrink(crop, self.size, halvings if whole else None)
         return cv2.resize(crop, self.size, interpolation=cv2.INTER_CUBIC)
 
     def camera(self, camera: Camera) -> Camera:

@@ -46,6 +46,19 @@ def test_shrink_keeps_pixel_centres_where_a_resize_puts_them(src, dst):
     assert np.abs(out[dh // 2, 2:-2] - expect[2:-2]).max() < 1e-3
 
 
+@pytest.mark.parametrize("size", [(1920, 1080), (1921, 1081)])
+def test_shrinks_of_one_frame_share_its_halvings_and_give_the_same_pixels(size):
+    frame = np.random.default_rng(1).integers(0, 256, (size[1], size[0], 3), np.uint8)
+    halvings: list = []
+    search = shrink(frame, (640, 360), halvings)
+    assert len(halvings) == 1  # (1920 -> 960, then interpolated)
+    halved = halvings[0][0]
+    coarse = shrink(frame, (320, 180), halvings)
+    assert len(halvings) == 2 and halvings[0][0] is halved  # (the first halving, taken)
+    assert np.array_equal(search, shrink(frame, (640, 360)))
+    assert np.array_equal(coarse, shrink(frame, (320, 180)))
+
+
 def test_shrink_by_a_whole_power_of_two_is_the_block_mean():
     rng = np.random.default_rng(0)
     img = rng.integers(0, 256, (96, 128, 3)).astype(np.float32)
