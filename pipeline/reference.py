@@ -501,16 +501,13 @@ _TOUCHING = (
 def _gap_to_paint(mask: np.ndarray, h_poly: np.ndarray, leg: float) -> float:
     """The distance (pixels) from the block H ``h_poly`` to the nearest other mark of
     ``mask`` (the paint) of ``_GAP_MARK_AREA`` of its area at least, and not a serif
-    (wholly within a quarter of a ``leg`` of the H); inf when none."""
-    poly = np.zeros(mask.shape, np.uint8)
-    cv2.fillPoly(poly, [np.round(h_poly).astype(np.int32)], 1)
+    (wholly within `_block_h`'s margin); inf when none."""
+    poly, grown = _block_h(mask.shape, h_poly, leg)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(
         ((mask > 0) & (poly == 0)).astype(np.uint8)
     )
     large = stats[:, cv2.CC_STAT_AREA] >= _GAP_MARK_AREA * np.count_nonzero(poly)
-    beyond = np.bincount(
-        labels[cv2.dilate(poly, _disc(max(1, round(0.25 * leg)))) == 0], minlength=n
-    )
+    beyond = np.bincount(labels[grown == 0], minlength=n)
     marks = np.flatnonzero(large & (beyond > 0))
     marks = marks[marks > 0]
     if not len(marks):
@@ -521,11 +518,19 @@ def _gap_to_paint(mask: np.ndarray, h_poly: np.ndarray, leg: float) -> float:
 
 def _beyond_h(region: np.ndarray, corners: np.ndarray, leg: float) -> float:
     """The share of the block H's area (``corners``, the region's box pixels) that the
-    region covers beyond it, the H grown by a quarter of its ``leg`` for serifs and blur."""
-    poly = np.zeros(region.shape, np.uint8)
-    cv2.fillPoly(poly, [np.round(corners).astype(np.int32)], 1)
-    grown = cv2.dilate(poly, _disc(max(1, round(0.25 * leg))))
+    region covers beyond it and `_block_h`'s margin."""
+    poly, grown = _block_h(region.shape, corners, leg)
     return np.count_nonzero(region & (grown == 0)) / max(np.count_nonzero(poly), 1)
+
+
+def _block_h(
+    shape: tuple[int, ...], corners: np.ndarray, leg: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The block H's pixels (uint8 0/1), and the same grown by a quarter of its ``leg``:
+    the margin serifs, rounded ends and blur take."""
+    poly = np.zeros(shape[:2], np.uint8)
+    cv2.fillPoly(poly, [np.round(corners).astype(np.int32)], 1)
+    return poly, cv2.dilate(poly, _disc(max(1, round(0.25 * leg))))
 
 
 def _opened_h(region: np.ndarray) -> bool:
