@@ -150,6 +150,20 @@ class Reference:
         return float(border.std()) <= _BOARD_UNIFORMITY * self.contrast
 
     @property
+    def outline_share(self) -> float | None:
+        """How much of the picture the board's rim spans (its box over the picture's, the
+        lesser of width and height), or None where no rim stands apart from what lies
+        beyond it. Under 1, the picture shows more than the pad: a floor around a disc
+        cropped to its width reads 0.97-1.0, and a square pad's picture taken with the
+        ground around it, less. The pad's size is the picture's all the same, so if it
+        is the board's, every distance comes that share short."""
+        rims = [m.corners_m for m in self.marks if m.rim]
+        if not rims:
+            return None
+        span = np.ptp(max(rims, key=lambda c: float(np.ptp(c, axis=0).prod())), axis=0)
+        return float(min(span[0] / self.pad_size_m, span[1] / self.pad_height_m))
+
+    @property
     def pad_over_h(self) -> float:
         """The pad's width over its H's: how far around a mark the size of the H
         the pad reaches."""
@@ -384,6 +398,7 @@ class Reference:
             "contrast": self.contrast,
             "leg_fraction": self.leg_fraction,
             "lesser_hs": [c.tolist() for c in self.lesser_hs],
+            "outline_share": self.outline_share,
         }
 
 

@@ -195,6 +195,11 @@ class ReferenceSummary(Model):
         description="smaller H's in the H's paint (the H of a painted HELIPAD): a frame's H "
         "that reads as one of them is not taken for the pad's"
     )
+    outline_share: float | None = Field(
+        description="how much of the picture the pad's outer edge (its board against the "
+        "floor) spans, where one was found: under 1, the picture shows ground around the "
+        "pad, and the pad's size is taken for the whole picture's"
+    )
     image_size: tuple[int, int]
     images: ReferenceImages
     verifier: VerifierStatus

@@ -125,6 +125,16 @@ def test_reference_upload_shows_corners(page, station: Station, tmp_path: Path) 
     page.get_by_test_id("reference-size").fill("1.0")
     page.get_by_test_id("reference-upload").click()
     expect(meta).to_contain_text("1 smaller H told apart from the pad's", timeout=15_000)
+    outline = page.get_by_test_id("reference-outline")
+    expect(outline).to_have_text("")
+    # The default pad with ground around it: the dashboard says what its size is taken for.
+    ground = np.full((720, 720, 3), (60, 120, 70), np.uint8)
+    ground[60:660, 60:660] = make_pad_image(600)
+    assert cv2.imwrite(str(picture), ground)
+    page.get_by_test_id("reference-file").set_input_files(str(picture))
+    page.get_by_test_id("reference-upload").click()
+    expect(outline).to_contain_text("spans 83 % of it", timeout=15_000)
+    expect(outline).to_contain_text("every distance would come 17 % short")
     assert not page.errors, page.errors
 
 

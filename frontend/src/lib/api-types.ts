@@ -2038,6 +2038,11 @@ export interface components {
             name: string;
             /** Orientation Deg */
             orientation_deg: number | null;
+            /**
+             * Outline Share
+             * @description how much of the picture the pad's outer edge (its board against the floor) spans, where one was found: under 1, the picture shows ground around the pad, and the pad's size is taken for the whole picture's
+             */
+            outline_share: number | null;
             /** Pad Size M */
             pad_size_m: number;
             /** Symmetric */

@@ -9,6 +9,10 @@ import { confirmDialog } from "./confirm-dialog";
 import { type Ctx, h, panel, setText } from "./dom";
 import { mountPerspectiveEditor } from "./perspective-editor";
 
+// A picture cropped to its pad's outer edge: the board's rim spans all of it (a disc's,
+// with a hem beyond it, 0.97 of it).
+const MIN_OUTLINE_SHARE = 0.95;
+
 /** While a mission runs, switching the reference asks first and says what happens. */
 export async function confirmReferenceSwitch(ctx: Ctx, what: string): Promise<boolean> {
   const m = ctx.store.status?.mission;
@@ -54,6 +58,7 @@ export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
   const title = h("div", { class: "ref-title", "data-testid": "reference-name" }, "No active reference");
   const meta = h("div", { class: "caption", "data-testid": "reference-meta" });
   const verifierLine = h("div", { class: "caption verifier-line", "data-testid": "reference-verifier" });
+  const outlineLine = h("div", { class: "caption outline-line", "data-testid": "reference-outline" });
   const imgThreshold = h("img", { class: "ref-img", alt: "threshold mask of the reference", "data-testid": "reference-threshold" });
   const imgCorners = h("img", {
     class: "ref-img",
@@ -88,7 +93,7 @@ export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
       h(
         "div",
         { class: "ref-layout" },
-        h("div", { class: "ref-main" }, title, meta, verifierLine, images),
+        h("div", { class: "ref-main" }, title, meta, outlineLine, verifierLine, images),
         h("div", { class: "ref-tables" }, cornersTable, invTable),
       ),
       perspective,
@@ -102,6 +107,7 @@ export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
   let shownId: string | null = null;
   function show(ref: ReferenceSummary | null): void {
     showVerifier(ref);
+    showOutline(ref);
     if (!ref) {
       setText(title, "No active reference");
       setText(meta, "");
@@ -136,6 +142,22 @@ export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
       ...ref.hu.map((v, i) => h("tr", {}, h("th", {}, `Hu ${i + 1}`), h("td", { class: "num" }, fmtSci(v)))),
       h("tr", {}, h("th", {}, "Orientation"), h("td", { class: "num" }, fmt(ref.orientation_deg, 1, "°"))),
       h("tr", {}, h("th", {}, "Eccentricity"), h("td", { class: "num" }, fmt(ref.eccentricity, 3))),
+    );
+  }
+
+  function showOutline(ref: ReferenceSummary | null): void {
+    const share = ref?.outline_share;
+    if (!ref || share === null || share === undefined || share >= MIN_OUTLINE_SHARE) {
+      setText(outlineLine, "");
+      return;
+    }
+    const size = fmt(ref.pad_size_m, 2, "m");
+    setText(
+      outlineLine,
+      `The pad's outer edge found on the picture spans ${Math.round(100 * share)} % of it, and ${size} is taken ` +
+        `for the whole picture's width. If ${size} is that edge's width, every distance would come ` +
+        `${Math.round(100 * (1 - share))} % short: crop the picture to the pad's edge, or mark its corners ` +
+        'below ("From a photo taken at an angle").',
     );
   }
 

@@ -288,7 +288,7 @@ def _magenta_pixels(client, summary: dict) -> np.ndarray:
     return np.argwhere(np.all(image == (255, 0, 255), axis=2))
 
 
-def test_the_summary_counts_marks_and_letters_and_the_corners_picture_shows_them(client):
+def test_the_summary_says_what_the_reference_learned_and_the_corners_picture_shows_it(client):
     paint = (170, 60, 20)
     pad = np.full((800, 800, 3), 235, np.uint8)  # a blue H over a HELIPAD on a light board
     pad[130:590, 210:305] = pad[130:590, 495:590] = pad[315:405, 210:590] = paint
@@ -300,9 +300,15 @@ def test_the_summary_counts_marks_and_letters_and_the_corners_picture_shows_them
     magenta = _magenta_pixels(client, summary)
     assert len(magenta) > 100  # the letter H's outline, under the H: HELIPAD's first letter
     assert magenta[:, 0].min() > 640 and magenta[:, 1].max() < 240, magenta.min(axis=0)
+    assert summary["outline_share"] == pytest.approx(1.0)
     r = upload(client, png(make_pad_image(600)), name="plain.png")
     assert r.json()["letter_hs"] == 0 and r.json()["marks"] == 3  # (its rim, two side bars)
     assert len(_magenta_pixels(client, r.json())) == 0
+    # The same pad with ground around it: its outer edge spans 600 / 720 of the picture.
+    picture = np.full((720, 720, 3), (60, 120, 70), np.uint8)
+    picture[60:660, 60:660] = make_pad_image(600)
+    r = upload(client, png(picture), name="uncropped.png")
+    assert r.json()["outline_share"] == pytest.approx(600 / 720, abs=0.01)
 
 
 def test_an_h_run_into_its_ring_is_refused_with_the_reason(client):
