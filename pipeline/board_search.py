@@ -323,9 +323,11 @@ def _fit_board(
     h_sides = np.arange(len(reference.edge_model.polygon)) < len(reference.corners_m)
     outline = _outline_sides(reference)
     best: tuple[float, np.ndarray] | None = None
-    for inner, turn in itertools.product(_board_outlines(reference), range(4)):
+    for board_edge, turn in itertools.product(_board_outlines(reference), range(4)):
         turned = np.roll(quad, -turn, axis=0)
-        start = cv2.getPerspectiveTransform(inner.astype(np.float32), turned.astype(np.float32))
+        start = cv2.getPerspectiveTransform(
+            board_edge.astype(np.float32), turned.astype(np.float32)
+        )
         fit = fit_homography(
             levels, reference.edge_model, start.astype(np.float64), iterations=3, search_px=3.0,
             sides_alike=False,
