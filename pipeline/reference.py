@@ -515,20 +515,23 @@ _TOUCHING = (
 
 def _gap_to_paint(mask: np.ndarray, h_poly: np.ndarray, leg: float) -> float:
     """The distance (pixels) from the block H ``h_poly`` to the nearest other mark of
-    ``mask`` (the paint) of ``_GAP_MARK_AREA`` of its area at least, and not a serif
-    (wholly within `_block_h`'s margin); inf when none."""
-    poly, grown = _block_h(mask.shape, h_poly, leg)
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(
-        ((mask > 0) & (poly == 0)).astype(np.uint8)
-    )
-    large = stats[:, cv2.CC_STAT_AREA] >= _GAP_MARK_AREA * np.count_nonzero(poly)
-    beyond = np.bincount(labels[grown == 0], minlength=n)
-    marks = np.flatnonzero(large & (beyond > 0))
-    marks = marks[marks > 0]
-    if not len(marks):
+    ``mask`` (the paint) of ``_GAP_MARK_AREA`` of its area at least; 0 when the H's
+    own paint runs on into one (`_beyond_h`), inf when there is none. Paint joined to
+    the H within `_block_h`'s margin is the H's: serifs, or a picture taken at a slant,
+    its legs leaning out of the block H."""
+    poly, _ = _block_h(mask.shape, h_poly, leg)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats((mask > 0).astype(np.uint8))
+    own = np.zeros(n, bool)
+    own[np.unique(labels[poly > 0])] = True
+    own[0] = False
+    if _beyond_h(own[labels], h_poly, leg) > _MAX_BEYOND_H:
+        return 0.0
+    others = ~own & (stats[:, cv2.CC_STAT_AREA] >= _GAP_MARK_AREA * np.count_nonzero(poly))
+    others[0] = False
+    if not others.any():
         return math.inf
     distance = cv2.distanceTransform(1 - poly, cv2.DIST_L2, 5)
-    return float(distance[np.isin(labels, marks)].min())
+    return float(distance[others[labels]].min())
 
 
 def _beyond_h(region: np.ndarray, corners: np.ndarray, leg: float) -> float:
