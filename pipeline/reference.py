@@ -95,6 +95,7 @@ class Reference:
     paint_bgr: tuple[float, float, float]  # the H's colour on the picture (median)
     board_bgr: tuple[float, float, float]  # its board's, right around it
     lesser_hs: tuple[np.ndarray, ...] = ()  # smaller H's in its paint (12 corners, metres)
+    slant_deg: float = 0.0  # how far its H's parallel sides converge (`_slant_deg`)
 
     @cached_property
     def edge_model(self) -> EdgeModel:
@@ -379,6 +380,7 @@ class Reference:
             channel=channel,
             channel_px_per_m=ww / pad_size_m,
             lesser_hs=tuple(to_m(c) for c in _lesser_hs(mask, region)),
+            slant_deg=_slant_deg(region, fit.corners, min(fit.leg_widths)),
         )
 
     def to_dict(self) -> dict:
@@ -399,6 +401,7 @@ class Reference:
             "leg_fraction": self.leg_fraction,
             "lesser_hs": [c.tolist() for c in self.lesser_hs],
             "outline_share": self.outline_share,
+            "slant_deg": self.slant_deg,
         }
 
 
@@ -532,6 +535,54 @@ def _gap_to_paint(mask: np.ndarray, h_poly: np.ndarray, leg: float) -> float:
         return math.inf
     distance = cv2.distanceTransform(1 - poly, cv2.DIST_L2, 5)
     return float(distance[others[labels]].min())
+
+
+def _slant_deg(region: np.ndarray, corners: np.ndarray, leg: float) -> float:
+    """How far (degrees) the sides of the H's ``region`` that a block H has parallel
+    converge: its legs' outer sides, and the line along its legs' tops against the one
+    along their feet. A picture taken at a slant, not straight from above, makes them
+    converge: the default pad's picture seen 5 degrees off the vertical from a pad's
+    width away, by 2.4 degrees (its poses then came 5 % off the altitude; 10 degrees
+    off, 5.0 and 8 %); the bench's pictures, by 0, and a photo rectified by hand, 0.5."""
+    contours, _ = cv2.findContours(
+        region.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE
+    )
+    edge = max(contours, key=cv2.contourArea).reshape(-1, 2).astype(np.float64)
+    c, reach = corners, 0.4 * leg
+    pairs = (
+        (_along(edge, [(c[0], c[11])], reach), _along(edge, [(c[5], c[6])], reach)),
+        (
+            _along(edge, [(c[0], c[1]), (c[4], c[5])], reach),
+            _along(edge, [(c[11], c[10]), (c[7], c[6])], reach),
+        ),
+    )
+    out = 0.0
+    for u, v in pairs:
+        if u is not None and v is not None:
+            out = max(out, math.degrees(math.acos(min(1.0, abs(float(u @ v))))))
+    return out
+
+
+def _along(
+    edge: np.ndarray, sides: list[tuple[np.ndarray, np.ndarray]], reach: float
+) -> np.ndarray | None:
+    """The unit direction of the line fitted to the ``edge`` points within ``reach`` of
+    the middle 70 % of ``sides`` ((a, b) segments), or None when too few are."""
+    near = []
+    for a, b in sides:
+        d = b - a
+        length = float(np.hypot(*d))
+        if length < 1e-9:
+            continue
+        u = d / length
+        rel = edge - a
+        t, off = rel @ u / length, rel @ np.array([-u[1], u[0]])
+        near.append(edge[(np.abs(off) < reach) & (t > 0.15) & (t < 0.85)])
+    pts = np.vstack(near) if near else np.zeros((0, 2))
+    if len(pts) < 8:
+        return None
+    vx, vy, _, _ = cv2.fitLine(pts.astype(np.float32), cv2.DIST_HUBER, 0, 0.01, 0.01).ravel()
+    return np.array([vx, vy], np.float64) / math.hypot(vx, vy)
 
 
 def _beyond_h(region: np.ndarray, corners: np.ndarray, leg: float) -> float:

@@ -200,6 +200,10 @@ class ReferenceSummary(Model):
         "floor) spans, where one was found: under 1, the picture shows ground around the "
         "pad, and the pad's size is taken for the whole picture's"
     )
+    slant_deg: float | None = Field(
+        description="how far the H's parallel sides converge on the picture (degrees): over "
+        "a degree or two, the picture was taken at a slant, not straight from above"
+    )
     image_size: tuple[int, int]
     images: ReferenceImages
     verifier: VerifierStatus

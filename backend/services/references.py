@@ -213,6 +213,7 @@ class ReferenceService:
             "marks": len(data.get("marks", ())),
             "letter_hs": len(data.get("lesser_hs", ())),
             "outline_share": data.get("outline_share"),
+            "slant_deg": data.get("slant_deg"),
             "image_size": data["image_size"],
             "images": {k: f"/api/references/{rid}/image/{k}" for k in REFERENCE_IMAGES},
             "verifier": self.trainer.status(rid).to_dict(),

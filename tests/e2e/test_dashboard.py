@@ -135,6 +135,22 @@ def test_reference_upload_shows_corners(page, station: Station, tmp_path: Path) 
     page.get_by_test_id("reference-upload").click()
     expect(outline).to_contain_text("spans 83 % of it", timeout=15_000)
     expect(outline).to_contain_text("every distance would come 17 % short")
+    slant = page.get_by_test_id("reference-slant")
+    expect(slant).to_have_text("")
+    # The pad seen 10 degrees off the vertical from a pad's width away: its H's legs
+    # converge by 5 degrees, and the dashboard says the picture looks taken at a slant.
+    lens = np.array([[800.0, 0, 400], [0, 800, 400], [0, 0, 1]])
+    c, s = np.cos(np.radians(10)), np.sin(np.radians(10))
+    warp = (
+        lens
+        @ np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+        @ [[1, 0, -400], [0, 1, -400], [0, 0, 800]]
+    )
+    seen = cv2.warpPerspective(make_pad_image(800), warp, (800, 800), borderValue=(60, 60, 60))
+    assert cv2.imwrite(str(picture), seen)
+    page.get_by_test_id("reference-file").set_input_files(str(picture))
+    page.get_by_test_id("reference-upload").click()
+    expect(slant).to_contain_text("converge by 5.0 °", timeout=15_000)
     assert not page.errors, page.errors
 
 

@@ -2045,6 +2045,11 @@ export interface components {
             outline_share: number | null;
             /** Pad Size M */
             pad_size_m: number;
+            /**
+             * Slant Deg
+             * @description how far the H's parallel sides converge on the picture (degrees): over a degree or two, the picture was taken at a slant, not straight from above
+             */
+            slant_deg: number | null;
             /** Symmetric */
             symmetric: boolean;
             verifier: components["schemas"]["VerifierStatus"];

@@ -12,6 +12,10 @@ import { mountPerspectiveEditor } from "./perspective-editor";
 // A picture cropped to its pad's outer edge: the board's rim spans all of it (a disc's,
 // with a hem beyond it, 0.97 of it).
 const MIN_OUTLINE_SHARE = 0.95;
+// A picture taken straight from above: its H's parallel sides stay so (a photo rectified by
+// hand, within 0.5°); 5° off the vertical, close up, they converge by 2.4° and poses come
+// 5 % off.
+const MAX_SLANT_DEG = 1.5;
 
 /** While a mission runs, switching the reference asks first and says what happens. */
 export async function confirmReferenceSwitch(ctx: Ctx, what: string): Promise<boolean> {
@@ -58,7 +62,8 @@ export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
   const title = h("div", { class: "ref-title", "data-testid": "reference-name" }, "No active reference");
   const meta = h("div", { class: "caption", "data-testid": "reference-meta" });
   const verifierLine = h("div", { class: "caption verifier-line", "data-testid": "reference-verifier" });
-  const outlineLine = h("div", { class: "caption outline-line", "data-testid": "reference-outline" });
+  const outlineLine = h("div", { class: "caption caution-line", "data-testid": "reference-outline" });
+  const slantLine = h("div", { class: "caption caution-line", "data-testid": "reference-slant" });
   const imgThreshold = h("img", { class: "ref-img", alt: "threshold mask of the reference", "data-testid": "reference-threshold" });
   const imgCorners = h("img", {
     class: "ref-img",
@@ -93,7 +98,7 @@ export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
       h(
         "div",
         { class: "ref-layout" },
-        h("div", { class: "ref-main" }, title, meta, outlineLine, verifierLine, images),
+        h("div", { class: "ref-main" }, title, meta, outlineLine, slantLine, verifierLine, images),
         h("div", { class: "ref-tables" }, cornersTable, invTable),
       ),
       perspective,
@@ -108,6 +113,7 @@ export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
   function show(ref: ReferenceSummary | null): void {
     showVerifier(ref);
     showOutline(ref);
+    showSlant(ref);
     if (!ref) {
       setText(title, "No active reference");
       setText(meta, "");
@@ -158,6 +164,20 @@ export function mountReferencePanel(root: HTMLElement, ctx: Ctx): void {
         `for the whole picture's width. If ${size} is that edge's width, every distance would come ` +
         `${Math.round(100 * (1 - share))} % short: crop the picture to the pad's edge, or mark its corners ` +
         'below ("From a photo taken at an angle").',
+    );
+  }
+
+  function showSlant(ref: ReferenceSummary | null): void {
+    const slant = ref?.slant_deg;
+    if (!ref || slant === null || slant === undefined || slant <= MAX_SLANT_DEG) {
+      setText(slantLine, "");
+      return;
+    }
+    setText(
+      slantLine,
+      `The H's parallel sides converge by ${fmt(slant, 1, "°")} on the picture: it looks taken at a slant, ` +
+        "not straight from above, and poses measured against it may come several % off. Take it straight " +
+        'from above, or mark the pad\'s corners below ("From a photo taken at an angle").',
     );
   }
 
