@@ -125,8 +125,15 @@ class ReferenceService:
             try:
                 self.activate(row["id"], quiet=True)
                 return
-            except Exception:
+            except Exception as exc:
                 log.exception("the stored active reference %s cannot be loaded", row["id"])
+                # (the operator's dashboard says so: the pad it will look for is another)
+                self._events.emit(
+                    "reference",
+                    f"reference {row['id']} ({row['name']}), active when the station stopped, "
+                    f"could not be loaded: {exc}. The default pad is active instead.",
+                    {"id": row["id"]},
+                )
         self.add(make_pad_image(), "default pad", pad_size_m, quiet=True)
 
     def close(self) -> None:

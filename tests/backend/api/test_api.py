@@ -434,6 +434,29 @@ def test_references_persist_across_restart(tmp_path):
         assert second.get(f"/api/references/{uploaded}/image/corners").status_code == 200
 
 
+def test_a_stored_reference_that_no_longer_loads_is_told_and_the_default_pad_taken(tmp_path):
+    settings = make_settings(tmp_path)
+    with in_process(settings) as first:
+        r = upload(first, png(make_pad_image(500)), pad_size="0.8", name="mine.png")
+        assert r.status_code == 201
+        stored = r.json()["id"]
+    # Its picture, replaced by one of an H run into a ring (refused since stop 52).
+    pad = np.full((800, 800, 3), 50, np.uint8)
+    cv2.circle(pad, (400, 400), 280, (245, 245, 245), 30, cv2.LINE_AA)
+    pad[180:621, 230:316] = pad[180:621, 485:571] = pad[360:441, 230:571] = 245
+    (picture,) = tmp_path.rglob(f"references/{stored}/original.png")
+    assert cv2.imwrite(str(picture), pad)
+    with in_process(settings) as second:
+        active = second.get("/api/reference").json()
+        assert active["id"] != stored and active["name"] == "default pad"
+        with second.websocket_connect("/ws") as ws:
+            events = ws.receive_json()["events"]
+        told = [e["text"] for e in events if e["kind"] == "reference"]
+        assert any(
+            f"reference {stored} (mine.png)" in t and "runs into another mark" in t for t in told
+        ), told
+
+
 # --- the WebSocket in-process --------------------------------------------------------------
 def test_ws_hello_at_once_and_ping(client):
     with client.websocket_connect("/ws") as ws:
