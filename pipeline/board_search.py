@@ -116,8 +116,9 @@ def find_boards(
                 boards.append(board)
     boards.sort(key=lambda b: -b.contrast)
     found = []
+    edges = _board_outlines(reference)
     for board in boards[:MAX_BOARDS]:
-        fitted = _fit_board(levels, reference, board.quad)
+        fitted = _fit_board(levels, reference, board.quad, edges)
         if fitted is not None:
             found.append(fitted)
     found.sort(key=lambda f: -f[0])
@@ -314,16 +315,16 @@ def _pad_sized(span: float, mark: float, ratio: float) -> bool:
 
 
 def _fit_board(
-    levels: np.ndarray, reference: Reference, quad: np.ndarray
+    levels: np.ndarray, reference: Reference, quad: np.ndarray, edges: list[np.ndarray]
 ) -> tuple[float, np.ndarray] | None:
     """The pad fitted from the quadrilateral in each of its four turns, taken for each
-    of the board's outlines (`_board_outlines`): the best pattern's (NCC, homography),
+    of the board's ``edges`` (`_board_outlines`): the best pattern's (NCC, homography),
     when it is the pad's."""
     box = pad_box_m(reference)
     h_sides = np.arange(len(reference.edge_model.polygon)) < len(reference.corners_m)
     outline = _outline_sides(reference)
     best: tuple[float, np.ndarray] | None = None
-    for board_edge, turn in itertools.product(_board_outlines(reference), range(4)):
+    for board_edge, turn in itertools.product(edges, range(4)):
         turned = np.roll(quad, -turn, axis=0)
         start = cv2.getPerspectiveTransform(
             board_edge.astype(np.float32), turned.astype(np.float32)

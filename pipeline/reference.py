@@ -467,7 +467,8 @@ def _find_h(work: np.ndarray) -> tuple[HFit, np.ndarray] | str:
                     if len(untold) > _MAX_TOUCH_LOOKS:
                         heapq.heappop(untold)  # (the smallest)
                     continue
-                if _beyond_h(region, fit.corners - 2.0, min(fit.leg_widths)) > _MAX_BEYOND_H:
+                block = _block_h(region.shape, fit.corners - 2.0, min(fit.leg_widths))
+                if _beyond_h(region, *block) > _MAX_BEYOND_H:
                     touching = True
                     continue
                 fit = HFit(
@@ -522,12 +523,12 @@ def _gap_to_paint(mask: np.ndarray, h_poly: np.ndarray, leg: float) -> float:
     own paint runs on into one (`_beyond_h`), inf when there is none. Paint joined to
     the H within `_block_h`'s margin is the H's: serifs, or a picture taken at a slant,
     its legs leaning out of the block H."""
-    poly, _ = _block_h(mask.shape, h_poly, leg)
+    poly, grown = _block_h(mask.shape, h_poly, leg)
     n, labels, stats, _ = cv2.connectedComponentsWithStats((mask > 0).astype(np.uint8))
     own = np.zeros(n, bool)
     own[np.unique(labels[poly > 0])] = True
     own[0] = False
-    if _beyond_h(own[labels], h_poly, leg) > _MAX_BEYOND_H:
+    if _beyond_h(own[labels], poly, grown) > _MAX_BEYOND_H:
         return 0.0
     others = ~own & (stats[:, cv2.CC_STAT_AREA] >= _GAP_MARK_AREA * np.count_nonzero(poly))
     others[0] = False
@@ -585,10 +586,9 @@ def _along(
     return np.array([vx, vy], np.float64) / math.hypot(vx, vy)
 
 
-def _beyond_h(region: np.ndarray, corners: np.ndarray, leg: float) -> float:
-    """The share of the block H's area (``corners``, the region's box pixels) that the
-    region covers beyond it and `_block_h`'s margin."""
-    poly, grown = _block_h(region.shape, corners, leg)
+def _beyond_h(region: np.ndarray, poly: np.ndarray, grown: np.ndarray) -> float:
+    """The share of the block H's area (``poly``, ``grown``: `_block_h`'s, on the
+    region's pixels) that the region covers beyond it and its margin."""
     return np.count_nonzero(region & (grown == 0)) / max(np.count_nonzero(poly), 1)
 
 
