@@ -95,6 +95,7 @@ def test_reference_upload_shows_corners(page, station: Station, tmp_path: Path) 
     import cv2
 
     from pipeline.render import make_pad_image
+    from tests.pads import helipad, seen_at_a_slant
 
     picture = tmp_path / "my-pad.png"
     assert cv2.imwrite(str(picture), make_pad_image())
@@ -116,11 +117,7 @@ def test_reference_upload_shows_corners(page, station: Station, tmp_path: Path) 
     expect(meta).to_contain_text("3 other marks")  # (its rim and two side bars)
     expect(meta).not_to_contain_text("smaller H")
     # A pad with a painted HELIPAD: the letter H it tells apart from its own is said.
-    paint = (170, 60, 20)
-    pad = np.full((800, 800, 3), 235, np.uint8)
-    pad[130:590, 210:305] = pad[130:590, 495:590] = pad[315:405, 210:590] = paint
-    cv2.putText(pad, "HELIPAD", (170, 720), cv2.FONT_HERSHEY_SIMPLEX, 2.6, paint, 9, cv2.LINE_AA)
-    assert cv2.imwrite(str(picture), pad)
+    assert cv2.imwrite(str(picture), helipad())
     page.get_by_test_id("reference-file").set_input_files(str(picture))
     page.get_by_test_id("reference-size").fill("1.0")
     page.get_by_test_id("reference-upload").click()
@@ -139,15 +136,7 @@ def test_reference_upload_shows_corners(page, station: Station, tmp_path: Path) 
     expect(slant).to_have_text("")
     # The pad seen 10 degrees off the vertical from a pad's width away: its H's legs
     # converge by 5 degrees, and the dashboard says the picture looks taken at a slant.
-    lens = np.array([[800.0, 0, 400], [0, 800, 400], [0, 0, 1]])
-    c, s = np.cos(np.radians(10)), np.sin(np.radians(10))
-    warp = (
-        lens
-        @ np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
-        @ [[1, 0, -400], [0, 1, -400], [0, 0, 800]]
-    )
-    seen = cv2.warpPerspective(make_pad_image(800), warp, (800, 800), borderValue=(60, 60, 60))
-    assert cv2.imwrite(str(picture), seen)
+    assert cv2.imwrite(str(picture), seen_at_a_slant(10.0))
     page.get_by_test_id("reference-file").set_input_files(str(picture))
     page.get_by_test_id("reference-upload").click()
     expect(slant).to_contain_text("converge by 5.0 °", timeout=15_000)

@@ -12,7 +12,6 @@ H's is refused; where they match both alike, the pad's marks must be found aroun
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
 import pytest
 
@@ -20,23 +19,10 @@ from pipeline.camera import Camera
 from pipeline.frame import process_frame
 from pipeline.reference import Reference
 from pipeline.render import DESIGNS, get_design, make_scene, random_view, render_view
+from tests.pads import helipad
 
 SIZE_M = 1.0
-PAINT = (170, 60, 20)  # blue, on a light grey board
 CAMERA = Camera.from_fov(640, 480, 60.0)
-
-
-def _helipad(with_h: bool = True) -> np.ndarray:
-    """A blue H over the word HELIPAD on a light board (800 px, for 1 m: 1.25 mm a pixel)."""
-    pad = np.full((800, 800, 3), 235, np.uint8)
-    if with_h:
-        w, h, leg, bar = 380, 460, 95, 90
-        x, y = 400 - w / 2, 360 - h / 2
-        for rect in ((x, y, leg, h), (x + w - leg, y, leg, h), (x, 360 - bar / 2, w, bar)):
-            x0, y0, rw, rh = (round(v) for v in rect)
-            pad[y0 : y0 + rh, x0 : x0 + rw] = PAINT
-    cv2.putText(pad, "HELIPAD", (170, 720), cv2.FONT_HERSHEY_SIMPLEX, 2.6, PAINT, 9, cv2.LINE_AA)
-    return pad
 
 
 def _corner_hs(with_h: bool = True) -> np.ndarray:
@@ -58,7 +44,7 @@ def _corner_hs(with_h: bool = True) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def reference() -> Reference:
-    return Reference.from_image(_helipad(), SIZE_M)
+    return Reference.from_image(helipad(), SIZE_M)
 
 
 def test_the_letter_h_of_the_pads_text_is_learned_where_it_is_painted(reference):
@@ -87,7 +73,7 @@ def _views(count: int):
 
 
 def test_the_letter_is_not_taken_for_the_pad_where_the_h_is_gone(reference):
-    erased = make_scene(_helipad(with_h=False), SIZE_M, rng=np.random.default_rng(100))
+    erased = make_scene(helipad(with_h=False), SIZE_M, rng=np.random.default_rng(100))
     found = []
     for i, view, gravity in _views(12):
         frame = render_view(erased, CAMERA, view, np.random.default_rng(i))
@@ -99,7 +85,7 @@ def test_the_letter_is_not_taken_for_the_pad_where_the_h_is_gone(reference):
 
 
 def test_the_pad_itself_is_found_and_posed_right(reference):
-    scene = make_scene(_helipad(), SIZE_M, rng=np.random.default_rng(100))
+    scene = make_scene(helipad(), SIZE_M, rng=np.random.default_rng(100))
     for i, view, gravity in _views(12):
         frame = render_view(scene, CAMERA, view, np.random.default_rng(i))
         res = process_frame(frame, reference, CAMERA, gravity_hint=gravity)

@@ -4,6 +4,7 @@ import pytest
 
 from pipeline import Reference
 from pipeline.render import DESIGNS, PadGeometry, get_design, make_lookalike, make_pad_image
+from tests.pads import h_in_a_ring, seen_at_a_slant
 
 
 @pytest.fixture(scope="module")
@@ -119,31 +120,13 @@ def test_an_h_drawn_as_an_outline_is_refused_as_one():
     assert Reference.from_image(picture, 1.0).polarity == "bright"
 
 
-def _h_in_a_ring(ring: str) -> np.ndarray:
-    """A white block H (340 x 440 px, legs 85) on a dark 800 px board, with a white
-    ring or frame: "crossed" by the H's legs, "touching" its corners, "frame" a square
-    frame at its legs' ends, "clear" a ring with a gap of board all round."""
-    picture = np.full((800, 800, 3), 50, np.uint8)
-    white = (245, 245, 245)
-    if ring == "crossed":
-        cv2.circle(picture, (400, 400), 280, white, 30, cv2.LINE_AA)
-    elif ring == "touching":
-        cv2.circle(picture, (400, 400), 282, white, 26, cv2.LINE_AA)  # (corners at 276 px)
-    elif ring == "frame":
-        cv2.rectangle(picture, (120, 170), (680, 630), white, 24)  # (inside 182-618; legs 180-620)
-    else:
-        cv2.circle(picture, (400, 400), 330, white, 26, cv2.LINE_AA)
-    picture[180:621, 230:316] = picture[180:621, 485:571] = picture[360:441, 230:571] = white
-    return picture
-
-
 @pytest.mark.parametrize("ring", ["crossed", "touching", "frame"])
 def test_an_h_run_into_its_ring_is_refused_as_one(ring):
     # (frames show the H and its ring as one shape: the crossed ring's pad, once taken,
     # was found from afar by its board alone and never within 4 m of it; the others
     # were refused as pictures with no H in them)
     with pytest.raises(ValueError, match="the H runs into another mark of its paint"):
-        Reference.from_image(_h_in_a_ring(ring), 1.0)
+        Reference.from_image(h_in_a_ring(ring), 1.0)
 
 
 def _h_framed_at(gap_px: int) -> np.ndarray:
@@ -167,42 +150,24 @@ def test_an_h_nearly_run_into_its_frame_is_refused_and_one_clear_of_it_taken():
         Reference.from_image(_h_framed_at(2), 1.0)
     ref = Reference.from_image(_h_framed_at(8), 1.0)
     assert np.ptp(ref.corners_m, axis=0) == pytest.approx([0.425, 0.55], abs=0.01)
-    ref = Reference.from_image(_h_in_a_ring("clear"), 1.0)
+    ref = Reference.from_image(h_in_a_ring("clear"), 1.0)
     assert np.ptp(ref.corners_m, axis=0) == pytest.approx([0.425, 0.55], abs=0.01)
-
-
-def _seen_at_a_slant(degrees: float, axis: str = "x") -> np.ndarray:
-    """The default pad's picture as a camera a pad's width above it sees it, turned
-    ``degrees`` off the vertical about the picture's ``axis`` (cropped to the pad)."""
-    f = 800.0
-    c, s = np.cos(np.radians(degrees)), np.sin(np.radians(degrees))
-    tilt = np.array(
-        [[1, 0, 0], [0, c, -s], [0, s, c]] if axis == "x" else [[c, 0, s], [0, 1, 0], [-s, 0, c]]
-    )
-    lens = np.array([[f, 0, 400], [0, f, 400], [0, 0, 1.0]])
-    warp = lens @ tilt @ [[1, 0, -400], [0, 1, -400], [0, 0, f]]
-    square = np.array([[[0, 0], [800, 0], [800, 800], [0, 800]]], float)
-    corners = cv2.perspectiveTransform(square, warp)[0]
-    lo, hi = corners.min(axis=0), corners.max(axis=0)
-    shift = np.array([[1, 0, -lo[0]], [0, 1, -lo[1]], [0, 0, 1.0]])
-    size = tuple(int(v) for v in np.ceil(hi - lo))
-    return cv2.warpPerspective(make_pad_image(800), shift @ warp, size, borderValue=(60, 60, 60))
 
 
 def test_an_h_whose_legs_lean_out_of_its_block_is_not_taken_for_one_run_into_a_mark():
     # (seen at a slant, the legs' far ends lean a third of a leg out of the block H
     # fitted, still joined to it: they are the H's paint, not marks beside it)
-    assert len(Reference.from_image(_seen_at_a_slant(30.0), 0.55).corners_m) == 12
+    assert len(Reference.from_image(seen_at_a_slant(30.0), 0.55).corners_m) == 12
 
 
 @pytest.mark.parametrize(("degrees", "slant"), [(0.0, 0.0), (5.0, 2.4), (10.0, 5.0)])
 def test_a_picture_taken_at_a_slant_says_how_far_the_hs_sides_converge(degrees, slant):
     # (5 degrees off the vertical, the poses measured against it came 5 % off the altitude)
-    assert Reference.from_image(_seen_at_a_slant(degrees), 0.55).slant_deg == pytest.approx(
+    assert Reference.from_image(seen_at_a_slant(degrees), 0.55).slant_deg == pytest.approx(
         slant, abs=0.3
     )
     # (about the other axis: the line along the legs' tops and the one along their feet)
-    sideways = Reference.from_image(_seen_at_a_slant(degrees, "y"), 0.55)
+    sideways = Reference.from_image(seen_at_a_slant(degrees, "y"), 0.55)
     assert sideways.slant_deg == pytest.approx(slant, abs=0.3)
 
 

@@ -11,6 +11,7 @@ from starlette.websockets import WebSocketDisconnect
 from pipeline import Reference
 from pipeline.render import make_pad_image
 from tests.backend.api.support import AUTH, TOKEN, in_process, make_settings, wait_for
+from tests.pads import h_in_a_ring, helipad
 
 COMMANDS = ["arm", "disarm", "force-disarm", "land", "rtl"]
 
@@ -289,11 +290,7 @@ def _magenta_pixels(client, summary: dict) -> np.ndarray:
 
 
 def test_the_summary_says_what_the_reference_learned_and_the_corners_picture_shows_it(client):
-    paint = (170, 60, 20)
-    pad = np.full((800, 800, 3), 235, np.uint8)  # a blue H over a HELIPAD on a light board
-    pad[130:590, 210:305] = pad[130:590, 495:590] = pad[315:405, 210:590] = paint
-    cv2.putText(pad, "HELIPAD", (170, 720), cv2.FONT_HERSHEY_SIMPLEX, 2.6, paint, 9, cv2.LINE_AA)
-    r = upload(client, png(pad), pad_size="1.0", name="helipad.png")
+    r = upload(client, png(helipad()), pad_size="1.0", name="helipad.png")
     assert r.status_code == 201, r.text
     summary = r.json()
     assert summary["letter_hs"] == 1 and summary["marks"] >= 7  # (the board's rim, the letters)
@@ -313,10 +310,9 @@ def test_the_summary_says_what_the_reference_learned_and_the_corners_picture_sho
 
 def test_an_h_run_into_its_ring_is_refused_with_the_reason(client):
     before = active_id(client)
-    pad = np.full((800, 800, 3), 50, np.uint8)
-    cv2.circle(pad, (400, 400), 280, (245, 245, 245), 30, cv2.LINE_AA)
-    pad[180:621, 230:316] = pad[180:621, 485:571] = pad[360:441, 230:571] = 245
-    assert_sentence(upload(client, png(pad)), 422, "runs into another mark of its paint")
+    assert_sentence(
+        upload(client, png(h_in_a_ring("crossed"))), 422, "runs into another mark of its paint"
+    )
     assert active_id(client) == before
 
 
@@ -441,11 +437,8 @@ def test_a_stored_reference_that_no_longer_loads_is_told_and_the_default_pad_tak
         assert r.status_code == 201
         stored = r.json()["id"]
     # Its picture, replaced by one of an H run into a ring (refused since stop 52).
-    pad = np.full((800, 800, 3), 50, np.uint8)
-    cv2.circle(pad, (400, 400), 280, (245, 245, 245), 30, cv2.LINE_AA)
-    pad[180:621, 230:316] = pad[180:621, 485:571] = pad[360:441, 230:571] = 245
     (picture,) = tmp_path.rglob(f"references/{stored}/original.png")
-    assert cv2.imwrite(str(picture), pad)
+    assert cv2.imwrite(str(picture), h_in_a_ring("crossed"))
     with in_process(settings) as second:
         active = second.get("/api/reference").json()
         assert active["id"] != stored and active["name"] == "default pad"
