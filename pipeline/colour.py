@@ -59,6 +59,11 @@ class Projection:
         return bool(np.allclose(np.abs(w), np.asarray(GRAY.weights), atol=0.02))
 
     @property
+    def inverted_luma(self) -> bool:
+        """Whether this is inverted luma (a dark H made bright): its light is 255 minus it."""
+        return self.is_gray and self.polarity == "dark"
+
+    @property
     def polarity(self) -> str:
         """ "bright" when the H is lighter than its board in plain gray, else "dark"."""
         return "bright" if float(np.dot(self.weights, GRAY.weights)) >= 0 else "dark"

@@ -32,7 +32,7 @@ from pipeline.candidates import (
 )
 from pipeline.homography_fit import apply_h, span_of
 from pipeline.measure import MIN_MARKS_FOUND, pad_box_m, pad_marks
-from pipeline.preprocess import Binarized, binarize_channel
+from pipeline.preprocess import Binarized
 from pipeline.reference import Reference
 from pipeline.shapes import Region, regions
 from pipeline.strokes import cut_through, stroke_samples
@@ -222,9 +222,7 @@ def search(
     ``first_look``: a coarse view searched before the working view, which judges
     again whatever this one turns down (its marks' detail may have merged away).
     """
-    projection = reference.projection
-    dark = projection.is_gray and projection.polarity == "dark"
-    binary = binarize_channel(channel, method, dark=dark)
+    binary = reference.binarize(channel, method)
     stages.lap("preprocess")
     area = float(channel.shape[0] * channel.shape[1])
     found = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=0.5 * area)

@@ -45,7 +45,6 @@ from pipeline.preprocess import (
     METHODS,
     Binarized,
     Halvings,
-    binarize_channel,
     check_image,
     smooth,
     smooth_channel,
@@ -417,20 +416,17 @@ def _follow_fine(
     H = _fit_near(levels, view, reference, H)
     if H is None:
         return None
-    dark = projection.is_gray and projection.polarity == "dark"
-    threshold = functools.partial(_threshold, channel, method, dark)
+    threshold = functools.partial(_threshold, reference, channel, method)
     return Followed(view, levels, threshold, H)
 
 
-def _threshold(channel: np.ndarray, method: str, dark: bool) -> np.ndarray:
-    return binarize_channel(channel, method, dark=dark).mask
+def _threshold(reference: Reference, channel: np.ndarray, method: str) -> np.ndarray:
+    return reference.binarize(channel, method).mask
 
 
 def _working_mask(image: np.ndarray, view: View, reference: Reference, method: str) -> np.ndarray:
     """The threshold mask of a view of the frame (the first look's is a quarter as fine)."""
-    projection = reference.projection
-    dark = projection.is_gray and projection.polarity == "dark"
-    return _threshold(to_channel(view.image(image), projection), method, dark)
+    return _threshold(reference, to_channel(view.image(image), reference.projection), method)
 
 
 def _motion(prior: FrameResult | None, H: np.ndarray) -> np.ndarray | None:

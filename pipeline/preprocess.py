@@ -49,11 +49,14 @@ METHODS = ("adaptive", "otsu", "seed", "shadow", "tophat")
 DEFAULT_METHOD = "adaptive"
 WORK_WIDTH = 640  # the seed's working resolution: 640 x 480
 # "tophat": the opening's square (as wide as "adaptive"'s block), and how far above it
-# paint stands, in `_log_light` levels (46 an e-fold): 16 is 41 % brighter. On the
+# paint stands, in `log_light` levels (46 an e-fold): 16 is 41 % brighter. On the
 # bench's views with a shadow across the pad (10 designs, 160 views), tried after
 # "shadow", 135 pads were found against 121; 12 and 22 found 132 and 134, squares
 # of 31 and 61 px 136 and 132.
 TOPHAT_SIDE_PX, TOPHAT_RISE = 41, 16
+# A pad whose paint stands out less (faded paint, `tophat_rise`) is looked for at this
+# share of its own rise on its picture, down to the least rise above the noise.
+TOPHAT_SHARE, MIN_TOPHAT_RISE = 0.4, 5.0
 
 
 def check_image(image: object, name: str = "image_bgr") -> np.ndarray:
@@ -193,7 +196,7 @@ def smooth_channel(image_bgr: np.ndarray, projection: Projection = GRAY) -> np.n
     return smooth(to_channel(image_bgr, projection))
 
 
-def _log_light(channel: np.ndarray, dark: bool) -> np.ndarray:
+def log_light(channel: np.ndarray, dark: bool) -> np.ndarray:
     """The channel on a log scale of the light (uint8); ``dark``: the channel is
     inverted luma (a dark H made bright), whose light is 255 minus it."""
     return cv2.LUT(channel, _LOG_DARK if dark else _LOG_LIGHT)
@@ -237,13 +240,30 @@ def binarize(
     return binarize_channel(to_channel(image_bgr, projection), method)
 
 
+def tophat_rise(light_contrast: float) -> float:
+    """The rise of "tophat" for a pad whose paint stands ``light_contrast`` above its
+    board on its picture (`log_light` levels).
+
+    On a probe pad of faded paint (gray 140 on 95: 18 levels), views of the bench's
+    real-world mix with a shadow across the pad or a glare on it lost its H at 16,
+    where gamma and glare leave it 25-35 % brighter than its board; 15 of 30 views were
+    found at 5-7 against 11. The ten designs' and the photos' references stand 54-107
+    above their boards: their rise stays 16."""
+    return max(MIN_TOPHAT_RISE, min(TOPHAT_RISE, TOPHAT_SHARE * light_contrast))
+
+
 def binarize_channel(
-    gray: np.ndarray, method: str = DEFAULT_METHOD, *, dark: bool = False
+    gray: np.ndarray,
+    method: str = DEFAULT_METHOD,
+    *,
+    dark: bool = False,
+    rise: float = TOPHAT_RISE,
 ) -> Binarized:
     """Threshold one channel (uint8) in which the marks to find are bright.
 
     ``dark``: the channel is inverted luma (for "shadow" and "tophat", which work on
-    the light).
+    the light). ``rise``: "tophat"'s, how far paint stands above the ground around it
+    (`tophat_rise`).
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
@@ -254,13 +274,13 @@ def binarize_channel(
         mask = above_local_mean(smoothed, 41, 12)
         t = float("nan")
     elif method == "shadow":
-        mask = above_local_mean(_log_light(smoothed, dark), 41, 8)
+        mask = above_local_mean(log_light(smoothed, dark), 41, 8)
         t = float("nan")
     elif method == "tophat":
-        light = _log_light(smoothed, dark)
+        light = log_light(smoothed, dark)
         square = cv2.getStructuringElement(cv2.MORPH_RECT, (TOPHAT_SIDE_PX, TOPHAT_SIDE_PX))
         ground = cv2.morphologyEx(light, cv2.MORPH_OPEN, square)
-        _, mask = cv2.threshold(cv2.subtract(light, ground), TOPHAT_RISE, 255, cv2.THRESH_BINARY)
+        _, mask = cv2.threshold(cv2.subtract(light, ground), rise, 255, cv2.THRESH_BINARY)
         t = float("nan")
     else:
         enhanced = seed_enhance(gray)

@@ -19,7 +19,14 @@ from pipeline.hfit import HFit, fit_h, h_deformation
 from pipeline.homography_fit import Deformation
 from pipeline.marks import Mark, band_beyond, find_marks, symmetric_marks
 from pipeline.moments import shape_moments
-from pipeline.preprocess import border_pixels, check_image
+from pipeline.preprocess import (
+    Binarized,
+    binarize_channel,
+    border_pixels,
+    check_image,
+    log_light,
+    tophat_rise,
+)
 from pipeline.shape_match import ShapeMatcher
 from pipeline.template import reference_pyramid
 
@@ -69,7 +76,8 @@ class Reference:
     the pad looks the same after a 180 degree turn.
     ``projection``: the colour channel in which the H is bright and its board
     dark (frames are searched on it). ``contrast``: H minus board on that
-    channel. ``leg_fraction``: the thinner leg's width over the H's width.
+    channel; ``light_contrast``: the same on the light's log scale
+    (`pipeline.preprocess.log_light`). ``leg_fraction``: the thinner leg's width over the H's width.
     ``lesser_hs``: the corners of the smaller marks of the H's paint shaped as an H
     (the letter H of a "HELIPAD" painted beside it): where the pad's H is hidden, one
     of them may pass for it, the pad posed several times too far (`pipeline.find`).
@@ -89,6 +97,7 @@ class Reference:
     symmetric: bool
     projection: Projection
     contrast: float
+    light_contrast: float
     leg_fraction: float
     channel: np.ndarray  # the picture on the learned channel (work resolution)
     channel_px_per_m: float
@@ -96,6 +105,16 @@ class Reference:
     board_bgr: tuple[float, float, float]  # its board's, right around it
     lesser_hs: tuple[np.ndarray, ...] = ()  # smaller H's in its paint (12 corners, metres)
     slant_deg: float = 0.0  # how far its H's parallel sides converge (`_slant_deg`)
+
+    def binarize(self, channel: np.ndarray, method: str) -> Binarized:
+        """A frame's channel (`pipeline.preprocess.to_channel`) thresholded for this
+        pad's H (``method``: one of `pipeline.preprocess.METHODS`)."""
+        return binarize_channel(
+            channel,
+            method,
+            dark=self.projection.inverted_luma,
+            rise=tophat_rise(self.light_contrast),
+        )
 
     @cached_property
     def edge_model(self) -> EdgeModel:
@@ -333,6 +352,8 @@ class Reference:
                 f"the H barely stands out from its board (contrast {h_contrast:.0f} of 255): "
                 "take the picture in even light, straight from above"
             )
+        light = log_light(smooth, projection.inverted_luma)
+        light_contrast = float(np.median(light[h_mask])) - float(np.median(light[board_mask]))
         board_level = float(smooth[board_mask].mean())
         level = 0.5 * (float(smooth[h_mask].mean()) + board_level)
         mask = np.where(smooth > level, 255, 0).astype(np.uint8)
@@ -374,6 +395,7 @@ class Reference:
             symmetric=symmetric_marks(corners_m, marks),
             projection=projection,
             contrast=h_contrast,
+            light_contrast=light_contrast,
             leg_fraction=fit.leg_fraction,
             paint_bgr=_median_bgr(work, h_mask),
             board_bgr=_median_bgr(work, board_mask),
@@ -398,6 +420,7 @@ class Reference:
             "symmetric": self.symmetric,
             "projection": self.projection.to_dict(),
             "contrast": self.contrast,
+            "light_contrast": self.light_contrast,
             "leg_fraction": self.leg_fraction,
             "lesser_hs": [c.tolist() for c in self.lesser_hs],
             "outline_share": self.outline_share,

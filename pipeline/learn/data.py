@@ -43,7 +43,7 @@ import numpy as np
 from pipeline.camera import Camera
 from pipeline.candidates import MIN_H_AREA_PX, MIN_H_SUPPORT, locate_all
 from pipeline.learn.encoding import Encoder, kabsch_rotation, normalise
-from pipeline.preprocess import DEFAULT_METHOD, binarize_channel, subsample, to_channel
+from pipeline.preprocess import DEFAULT_METHOD, subsample, to_channel
 from pipeline.reference import Reference
 from pipeline.render import (
     LOOKALIKE_KINDS,
@@ -135,7 +135,7 @@ def frame_candidates(
     ones, as in process_frame.
     """
     work, _ = subsample(image)
-    binary = binarize_channel(to_channel(work, reference.projection), method)
+    binary = reference.binarize(to_channel(work, reference.projection), method)
     area = float(work.shape[0] * work.shape[1])
     found = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=0.5 * area)
     out = []

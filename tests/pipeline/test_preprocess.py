@@ -6,10 +6,12 @@ from pipeline.preprocess import (
     METHODS,
     above_local_mean,
     binarize,
+    binarize_channel,
     check_image,
     shrink,
     subsample,
     to_gray,
+    tophat_rise,
 )
 from pipeline.view import View
 
@@ -125,6 +127,27 @@ def test_the_tophat_threshold_marks_a_stroke_in_a_narrow_shadow_band_and_not_its
     mask = binarize(frame, "tophat").mask
     assert mask[60, 80] == 255 and mask[30, 80] == 255
     assert not mask[rim].any() and not mask[52:68, 20:60].any()
+
+
+def test_the_tophat_threshold_marks_faint_paint_at_a_lower_rise():
+    # Faded paint, 30 % brighter than its board (12 light levels): under the rise a
+    # pad of fresh paint is looked for at, it is lost; at a faded pad's, it is marked,
+    # and the board's noise is not.
+    img = np.full((120, 160), 90.0)
+    img[20:100, 75:85] = 117
+    frame = np.clip(img + np.random.default_rng(0).normal(0, 2, img.shape), 0, 255)
+    channel = frame.astype(np.uint8)
+    assert not binarize_channel(channel, "tophat").mask[20:100, 75:85].any()
+    faint = binarize_channel(channel, "tophat", rise=tophat_rise(18.0)).mask
+    assert faint[25:95, 77:83].all()
+    assert not faint[:, :60].any()
+
+
+@pytest.mark.parametrize(
+    ("light_contrast", "rise"), [(97.0, 16.0), (40.0, 16.0), (18.0, 7.2), (5.0, 5.0)]
+)
+def test_a_pad_is_looked_for_at_a_rise_its_own_paint_reaches(light_contrast, rise):
+    assert tophat_rise(light_contrast) == pytest.approx(rise)
 
 
 def test_seed_threshold_fails_under_dim_light_where_otsu_holds():
