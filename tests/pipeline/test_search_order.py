@@ -13,7 +13,7 @@ import pipeline.frame
 from pipeline import Camera, process_frame
 from pipeline.find import Tally
 from pipeline.frame import COARSE_WIDTH_PX
-from tests.pipeline.bench_support import CAM, sweep_frames
+from tests.pipeline.bench_support import CAM, bench_frames, sweep_frames
 
 ADAPTIVE_640 = (640, "adaptive")
 ENLARGED = (1280, "adaptive")
@@ -158,3 +158,22 @@ def test_a_mark_judged_on_the_same_pixels_with_the_same_threshold_is_not_judged_
     assert not tally.seen_alike(box, 1.0, "adaptive")  # other pixels
     assert not tally.seen_alike(box, 2.0, "tophat")  # another threshold
     assert not tally.seen_alike(box + np.array([20.0, 0.0, 20.0, 0.0]), 2.0, "adaptive")
+
+
+def test_a_pad_whose_h_a_first_look_takes_only_from_nearby_is_searched_without_one(monkeypatch):
+    # The paper sheet's H, 7 cm tall: a first look (320 px wide) takes it from 2 m
+    # away at most, where a landing follows the pad. The design bench's views of it
+    # (0.5-3.3 m) are searched from the working view on, and found; the default pad's
+    # H (28 cm, 7.6 m) still gets a first look.
+    log = _searched(monkeypatch)
+    for i in (0, 1, 2):
+        pad, _, hint, view, reference = bench_frames("paper_ring", 0, i, "today")
+        log.clear()
+        res = process_frame(pad, reference, CAM, gravity_hint=hint)
+        assert res.detected and res.pose is not None, res.reason
+        assert _position_error(res, view) < 0.05 * view.altitude_m
+        assert log[0] == ADAPTIVE_640 and COARSE_WIDTH_PX not in [w for w, _ in log], log
+    pad, _, hint, _, reference = bench_frames("default", 0, 0, "today")
+    log.clear()
+    process_frame(pad, reference, CAM, gravity_hint=hint)
+    assert log[0] == (COARSE_WIDTH_PX, "adaptive"), log
