@@ -53,6 +53,12 @@ _FLAGS: dict[str, tuple[str, type, str]] = {
     ),
     "--camera": ("camera", str, "sim | cmucam4:PORT | opencv:SOURCE (default sim)"),
     "--camera-calibration": ("camera_calibration", str, "OpenCV calibration file"),
+    "--camera-mount": (
+        "camera_mount",
+        str,
+        "the camera's turn from looking straight down, picture top to the nose: "
+        "roll,pitch,yaw in degrees, as the vehicle's (default 0,0,0)",
+    ),
     "--reference": ("reference", str, "picture of the pad, cropped to its edge"),
     "--pad-size": ("pad_size", float, "pad width in metres (default 0.55)"),
     "--data-dir": ("data_dir", str, "where the database, token and flights live (./data)"),

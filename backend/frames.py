@@ -13,6 +13,11 @@ import math
 
 import numpy as np
 
+from pipeline.result import yaw_of
+
+#: Looking straight down, image top = vehicle nose (columns: cam x, y, z in body FRD).
+DOWN_MOUNT = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+
 
 def rot_ned_body(roll: float, pitch: float, yaw: float) -> np.ndarray:
     """``R_ned_body`` (body FRD -> NED) for MAVLink ATTITUDE angles in radians."""
@@ -37,17 +42,40 @@ def rot_ned_pad(pad_heading_deg: float) -> np.ndarray:
     return np.column_stack([x, y, z])
 
 
-def camera_yaw_in_pad(pad_heading_deg: float, vehicle_yaw_rad: float) -> float:
-    """The down-looking camera's yaw in the pad frame (``pipeline.result.yaw_of``), degrees.
+def mount_rotation(roll_deg: float, pitch_deg: float, yaw_deg: float) -> np.ndarray:
+    """``R_body_cam`` of a camera turned from `DOWN_MOUNT` as a vehicle turns by these
+    angles (degrees, ZYX about its forward, right and down axes): pitch up looks ahead
+    of straight down, roll right to its left, yaw right turns the picture's top to
+    the right of the nose.
 
-    The camera's image top is the vehicle's nose, so its yaw is the pad's heading minus
-    the vehicle's (headings turn clockwise, the pad-frame yaw counter-clockwise).
-
-    >>> camera_yaw_in_pad(30.0, math.radians(50.0))
-    -20.0
+    >>> bool(np.allclose(mount_rotation(0.0, 0.0, 0.0), DOWN_MOUNT))
+    True
+    >>> np.round(mount_rotation(0.0, 30.0, 0.0)[:, 2], 3).tolist()  # the optical axis
+    [0.5, 0.0, 0.866]
     """
-    yaw = float(pad_heading_deg) - math.degrees(float(vehicle_yaw_rad))
-    return (yaw + 180.0) % 360.0 - 180.0
+    r, p, y = (math.radians(float(a)) for a in (roll_deg, pitch_deg, yaw_deg))
+    return rot_ned_body(r, p, y) @ DOWN_MOUNT
+
+
+def camera_in_pad(
+    pad_heading_deg: float, roll: float, pitch: float, yaw: float, R_body_cam: np.ndarray
+) -> np.ndarray:
+    """``R_pad_cam`` of a camera mounted by ``R_body_cam`` on a vehicle at ATTITUDE's
+    roll, pitch and yaw (radians), over a pad whose picture's top faces ``pad_heading_deg``."""
+    return rot_ned_pad(pad_heading_deg).T @ rot_ned_body(roll, pitch, yaw) @ R_body_cam
+
+
+def vision_hints(
+    pad_heading_deg: float, roll: float, pitch: float, yaw: float, R_body_cam: np.ndarray
+) -> dict[str, object]:
+    """``process_frame``'s hints from the vehicle's attitude (radians) and the camera's
+    mount: the camera's yaw in the pad frame, which settles the H's half-turn, and
+    down in the camera frame, which tells the pad's level pose from its tilted twin."""
+    R_pad_cam = camera_in_pad(pad_heading_deg, roll, pitch, yaw, R_body_cam)
+    return {
+        "yaw_hint": yaw_of(R_pad_cam),
+        "gravity_hint": gravity_in_camera(roll, pitch, R_body_cam),
+    }
 
 
 def gravity_in_camera(roll: float, pitch: float, R_body_cam: np.ndarray) -> np.ndarray:

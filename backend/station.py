@@ -33,9 +33,8 @@ from backend.camera import FrameSource, open_source
 from backend.datadir import prepare_data_dir
 from backend.encoder import EncodedFrame, FrameEncoder
 from backend.framebus import FrameBus
-from backend.frames import camera_yaw_in_pad, gravity_in_camera
+from backend.frames import mount_rotation, vision_hints
 from backend.link import LinkEvent, VehicleLink
-from backend.missions.geometry import DOWN_MOUNT
 from backend.missions.manager import MissionManager
 from backend.recorder import Recorder
 from backend.recovery import recover
@@ -201,6 +200,7 @@ def build_station(settings: Settings) -> Station:
         )
 
         camera = _camera_model(settings)
+        mount = mount_rotation(*settings.camera_mount)  # (R_body_cam)
         source = _open_camera(settings, camera, link, stand_in)
         results: FrameBus[Processed] = FrameBus("results")
 
@@ -210,10 +210,7 @@ def build_station(settings: Settings) -> Station:
             att = link.telemetry.attitude
             if att is None:
                 return {}
-            return {
-                "yaw_hint": camera_yaw_in_pad(settings.pad_heading_deg, att.yaw),
-                "gravity_hint": gravity_in_camera(att.roll, att.pitch, DOWN_MOUNT),
-            }
+            return vision_hints(settings.pad_heading_deg, att.roll, att.pitch, att.yaw, mount)
 
         worker = VisionWorker(
             source,
@@ -251,6 +248,7 @@ def build_station(settings: Settings) -> Station:
                 pad_heading_deg=settings.pad_heading_deg,
                 camera_hfov_deg=camera.hfov_deg,
                 aspect=camera.width / camera.height,
+                mount_rotation=mount,
             )
             viewer_feed = ViewerFeed(viewer, lambda: link.telemetry, results)
             shown = viewer
@@ -419,6 +417,7 @@ def _open_camera(
         width=camera.width,
         height=camera.height,
         hfov_deg=camera.hfov_deg,
+        mount_rotation=mount_rotation(*settings.camera_mount),
         seed=settings.sim_seed,
     )
     return SimCamera(vehicle_pose=vehicle_pose, config=config)

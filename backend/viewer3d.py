@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from backend.framebus import FrameBus
-from backend.frames import rot_ned_body, rot_ned_pad
+from backend.frames import DOWN_MOUNT, rot_ned_body, rot_ned_pad
 from backend.link import Telemetry
 from backend.tokens import tokens_equal
 from backend.vision_worker import Processed
@@ -41,8 +41,6 @@ log = logging.getLogger(__name__)
 # ENU from NED: swap north/east, flip down.
 _ENU_FROM_NED = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
 _IMAGE_FLIP = np.diag([1.0, -1.0, -1.0])
-# The camera in the body (FRD) frame: optical axis down, image x right, image y backward.
-R_BODY_CAM = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 
 
 def rotation_world_pad(heading_deg: float) -> np.ndarray:
@@ -124,6 +122,7 @@ class Viewer3D:
         pad_heading_deg: float = 0.0,
         camera_hfov_deg: float = 60.0,
         aspect: float = 4 / 3,
+        mount_rotation: np.ndarray = DOWN_MOUNT,
         trail_points: int = 600,
     ) -> None:
         self.host, self.port = host, int(port)
@@ -133,6 +132,7 @@ class Viewer3D:
         self._pad_heading = float(pad_heading_deg)
         self._hfov = math.radians(camera_hfov_deg)
         self._aspect = float(aspect)
+        self._mount = np.asarray(mount_rotation, float)  # (R_body_cam)
         self._trail: deque[np.ndarray] = deque(maxlen=trail_points)
         self._lock = threading.Lock()
         self._server: viser.ViserServer | None = None
@@ -190,7 +190,7 @@ class Viewer3D:
                 aspect=self._aspect,
                 scale=0.3,
                 color=(40, 120, 255),
-                wxyz=_wxyz(R_BODY_CAM),
+                wxyz=_wxyz(self._mount),
             )
             self._h["vision"] = scene.add_frame(
                 "/vision", axes_length=0.25, axes_radius=0.015, visible=False

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from backend.missions.geometry import DOWN_MOUNT
+from backend.frames import DOWN_MOUNT
 
 STRATEGIES = ("plnd", "guided", "extnav")
 ABORT_MODES = ("LOITER", "RTL")

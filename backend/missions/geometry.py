@@ -13,11 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from backend.frames import rot_ned_body
+from backend.frames import DOWN_MOUNT, rot_ned_body
 from pipeline import Camera, Pose
-
-#: Looking straight down, image top = vehicle nose (columns: cam x, y, z in body FRD).
-DOWN_MOUNT = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 
 
 def wrap180(deg: float) -> float:
@@ -32,8 +29,8 @@ def wrap90(deg: float) -> float:
 
 def camera_yaw_hint(pad_heading_deg: float, vehicle_yaw_rad: float) -> float:
     """The down-looking camera's yaw in the pad frame (``pipeline.result.yaw_of``) from the
-    vehicle's heading: the ``yaw_hint`` that settles the H's 180-degree ambiguity (the
-    station's ``camera_yaw_in_pad``, without importing the station)."""
+    vehicle's heading alone: the ``yaw_hint`` that settles the H's 180-degree ambiguity
+    (the station's `backend.frames.vision_hints` for a level vehicle)."""
     return wrap180(float(pad_heading_deg) - math.degrees(float(vehicle_yaw_rad)))
 
 

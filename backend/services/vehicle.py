@@ -9,8 +9,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from backend.frames import mount_rotation
 from backend.link import CommandResult, LinkState, Telemetry, VehicleLink
-from backend.missions import LandConfig
+from backend.missions import LandConfig, Mount
 from backend.settings import Settings
 
 #: The commands the API offers, by route name.
@@ -76,5 +77,6 @@ class VehicleService:
             pad_north_m=s.pad_north,
             pad_east_m=s.pad_east,
             pad_heading_deg=s.pad_heading_deg,
+            mount=Mount(rotation=mount_rotation(*s.camera_mount)),
             **changes,
         )

@@ -54,6 +54,11 @@ def test_blank_env_means_not_given(monkeypatch):
         ("token", "short", "at least 8"),
         ("signing_key", "zz", "hex"),
         ("jpeg_quality", 5, "greater than or equal to 10"),
+        ("camera_mount", "0,10", "roll,pitch,yaw"),
+        ("camera_mount", "a,b,c", "roll,pitch,yaw"),
+        ("camera_mount", "0,60,0", "within 45 degrees"),
+        ("camera_mount", "0,0,200", "within -180..180"),
+        ("camera_mount", "nan,0,0", "finite"),
     ],
 )
 def test_bad_values_are_refused_with_a_reason(field, value, words):
@@ -85,6 +90,14 @@ def test_cli_flags_override_env(monkeypatch):
         True,
         0.8,
     )
+
+
+def test_the_camera_mount_comes_from_the_environment_or_a_flag(monkeypatch):
+    assert Settings().camera_mount == (0.0, 0.0, 0.0)
+    monkeypatch.setenv("VISLAND_CAMERA_MOUNT", "1.5, -8, 90")
+    assert Settings().camera_mount == (1.5, -8.0, 90.0)
+    args = build_parser().parse_args(["serve", "--camera-mount", "0,12,180"])
+    assert settings_from_args(args).camera_mount == (0.0, 12.0, 180.0)
 
 
 def test_get_settings_is_cached_and_overridable(monkeypatch):

@@ -10,11 +10,8 @@ import numpy as np
 import pytest
 import viser.transforms as tf
 
-from backend.frames import camera_yaw_in_pad
-from backend.viewer3d import (
-    R_BODY_CAM,
-    Viewer3D,
-)
+from backend.frames import DOWN_MOUNT, mount_rotation, vision_hints
+from backend.viewer3d import Viewer3D
 from pipeline.render import make_pad_image
 from pipeline.result import yaw_of
 from sim.camera import (
@@ -25,16 +22,28 @@ from sim.camera import (
 from tests.serve import free_port
 
 
-def test_camera_mount_matches_the_simulated_camera():
-    assert np.allclose(R_BODY_CAM, SimCameraConfig().mount_rotation)
-
-
 @pytest.mark.parametrize(("pad", "yaw_deg"), [(0, 0), (0, 45), (30, 170), (-120, -60)])
 def test_yaw_hint_is_the_yaw_the_camera_really_has(pad, yaw_deg):
+    # Looking straight down, picture top to the nose: the pad's heading less the
+    # vehicle's (headings turn clockwise, the pad frame's yaw counter-clockwise).
     pose = VehiclePose((1.0, 2.0, -3.0), 0.0, 0.0, math.radians(yaw_deg), 0.0)
     _, R_pad_cam = camera_pose_in_pad_frame(pose, SimCameraConfig(pad_heading_deg=pad))
-    got = camera_yaw_in_pad(pad, math.radians(yaw_deg))
+    got = vision_hints(pad, 0.0, 0.0, math.radians(yaw_deg), DOWN_MOUNT)["yaw_hint"]
     assert abs((got - yaw_of(R_pad_cam) + 180) % 360 - 180) < 1e-9
+    assert abs((got - (pad - yaw_deg) + 180) % 360 - 180) < 1e-9
+
+
+@pytest.mark.parametrize("mount", [(0.0, 0.0, 0.0), (3.0, -10.0, 0.0), (0.0, 20.0, 90.0)])
+def test_the_hints_are_the_cameras_on_its_mount(mount):
+    # The simulated camera on a vehicle rolled, pitched and turned, its mount as set:
+    # the hints are its yaw in the pad frame and down in its own frame.
+    roll, pitch, yaw = np.radians([4.0, -6.0, 130.0])
+    R_body_cam = mount_rotation(*mount)
+    config = SimCameraConfig(pad_heading_deg=25.0, mount_rotation=R_body_cam)
+    _, R_pad_cam = camera_pose_in_pad_frame(VehiclePose((0, 0, -3.0), roll, pitch, yaw, 0), config)
+    hints = vision_hints(25.0, roll, pitch, yaw, R_body_cam)
+    assert abs((hints["yaw_hint"] - yaw_of(R_pad_cam) + 180) % 360 - 180) < 1e-9
+    np.testing.assert_allclose(hints["gravity_hint"], R_pad_cam.T @ [0.0, 0.0, -1.0], atol=1e-12)
 
 
 def test_viser_serves_the_scene_and_takes_updates():
