@@ -421,6 +421,11 @@ class PublicSettings(Model):
     pad_north_m: float = Field(0.0, description="the pad centre in the local frame (m)")
     pad_east_m: float = 0.0
     camera_hfov_deg: float = Field(60.0, description="the camera's horizontal field of view")
+    camera_mount_deg: tuple[float, float, float] = Field(
+        (0.0, 0.0, 0.0),
+        description="how the camera is turned from looking straight down, its picture's top "
+        "to the nose: roll, pitch, yaw in degrees, as the vehicle's (--camera-mount)",
+    )
     camera_aspect: float = Field(4 / 3, description="image width / height")
     simulated_vehicle: bool
 

@@ -76,6 +76,7 @@ class RuntimeSettings:
             "pad_north_m": s.pad_north,
             "pad_east_m": s.pad_east,
             "camera_hfov_deg": s.camera_hfov_deg,
+            "camera_mount_deg": list(s.camera_mount),
             "camera_aspect": 4 / 3,
             "simulated_vehicle": s.mavlink is None,
         }

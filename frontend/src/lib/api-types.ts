@@ -1962,6 +1962,20 @@ export interface components {
              * @default 60
              */
             camera_hfov_deg: number;
+            /**
+             * Camera Mount Deg
+             * @description how the camera is turned from looking straight down, its picture's top to the nose: roll, pitch, yaw in degrees, as the vehicle's (--camera-mount)
+             * @default [
+             *       0,
+             *       0,
+             *       0
+             *     ]
+             */
+            camera_mount_deg: [
+                number,
+                number,
+                number
+            ];
             /** Jpeg Quality */
             jpeg_quality: number;
             /** Mavlink */

@@ -1,6 +1,8 @@
 // Where the camera sees the ground: the four image corners' rays through the vehicle's
 // attitude, met with the ground plane (local NED, ground at down = 0). The camera
-// looks down: image x along the body's right, image y toward the body's back.
+// looks down, image x along the body's right, image y toward the body's back, unless
+// its mount turns it (roll, pitch, yaw in degrees, as the vehicle's: the station's
+// camera_mount_deg).
 
 export type Vec3 = [number, number, number];
 
@@ -28,21 +30,30 @@ export function cameraFootprint(
   yawRad: number,
   hfovDeg: number,
   aspect: number,
+  mountDeg: Vec3 = [0, 0, 0],
 ): [number, number][] | null {
   const height = -positionNed[2];
   if (!(height > 0.05)) return null;
   const tx = Math.tan((hfovDeg * Math.PI) / 360);
   const ty = tx / aspect;
   const R = rotNedBody(rollRad, pitchRad, yawRad);
+  const [mr, mp, my] = mountDeg.map((d) => (d * Math.PI) / 180);
+  const mount = rotNedBody(mr, mp, my);
   const out: [number, number][] = [];
   // image corners TL, TR, BR, BL: x right, y down; camera z = body down
   for (const [ix, iy] of [[-1, -1], [1, -1], [1, 1], [-1, 1]] as const) {
     // camera (x right, y down in the image, z forward=down) -> body FRD: forward = -y, right = x, down = z
-    const body: Vec3 = [-iy * ty, ix * tx, 1];
+    const body = mul(mount, [-iy * ty, ix * tx, 1]);
     const ned = mul(R, body);
     if (ned[2] <= 1e-6) return null;
     const s = height / ned[2];
     out.push([positionNed[0] + s * ned[0], positionNed[1] + s * ned[1]]);
   }
   return out;
+}
+
+/** The camera's mount from the station's settings (straight down when not told). */
+export function mountOf(settings: Record<string, unknown>): Vec3 {
+  const m = settings.camera_mount_deg;
+  return Array.isArray(m) && m.length === 3 && m.every((v) => Number.isFinite(v)) ? [Number(m[0]), Number(m[1]), Number(m[2])] : [0, 0, 0];
 }

@@ -4,7 +4,7 @@
 // driven by play/pause and the scrubber.
 
 import { ApiError, describeFailure, type FlightReplay, type FlightSummary } from "../lib/api";
-import { cameraFootprint } from "../lib/footprint";
+import { cameraFootprint, mountOf } from "../lib/footprint";
 import { fmt, fmtDate } from "../lib/format";
 import { sentence } from "../lib/messages";
 import { at, clock, missionStateAt } from "../lib/timeline";
@@ -239,7 +239,7 @@ function buildPlayer(root: HTMLElement, ctx: Ctx, data: FlightReplay, close: () 
     const vehicle = s && s.n !== null && s.e !== null && s.d !== null ? { n: s.n, e: s.e, d: s.d, yaw: s.yaw ?? 0 } : null;
     const footprint =
       vehicle && s && s.roll !== null && s.pitch !== null && s.yaw !== null
-        ? cameraFootprint([vehicle.n, vehicle.e, vehicle.d], s.roll, s.pitch, s.yaw, Number(settings.camera_hfov_deg ?? 60), Number(settings.camera_aspect ?? 4 / 3))
+        ? cameraFootprint([vehicle.n, vehicle.e, vehicle.d], s.roll, s.pitch, s.yaw, Number(settings.camera_hfov_deg ?? 60), Number(settings.camera_aspect ?? 4 / 3), mountOf(settings))
         : null;
     const scene: LocalScene = { pad, vehicle, track, footprint };
     const gm = fitCanvas(mapCanvas);

@@ -1,7 +1,7 @@
 // Drawing the local frame (metres from home, north up): a top-down map and a simple
 // perspective view of the same scene, for the live map and the replay.
 
-import { cameraFootprint } from "../lib/footprint";
+import { cameraFootprint, mountOf } from "../lib/footprint";
 import type { Store } from "../lib/store";
 import { COLORS } from "./dom";
 
@@ -21,7 +21,7 @@ export function liveScene(store: Store, track: [number, number, number][]): Loca
   const vehicle = p && p.x !== null && p.y !== null && p.z !== null ? { n: p.x, e: p.y, d: p.z, yaw: a?.yaw ?? 0 } : null;
   const footprint =
     vehicle && a && a.roll !== null && a.pitch !== null && a.yaw !== null
-      ? cameraFootprint([vehicle.n, vehicle.e, vehicle.d], a.roll, a.pitch, a.yaw, Number(s.camera_hfov_deg ?? 60), Number(s.camera_aspect ?? 4 / 3))
+      ? cameraFootprint([vehicle.n, vehicle.e, vehicle.d], a.roll, a.pitch, a.yaw, Number(s.camera_hfov_deg ?? 60), Number(s.camera_aspect ?? 4 / 3), mountOf(s))
       : null;
   const pad = { n: Number(s.pad_north_m ?? 0), e: Number(s.pad_east_m ?? 0), size: Number(s.pad_size_m ?? 0.55), headingDeg: Number(s.pad_heading_deg ?? 0) };
   return { pad, vehicle, track, footprint };

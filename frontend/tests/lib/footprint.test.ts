@@ -20,6 +20,18 @@ describe("cameraFootprint", () => {
     const centreN = nose.reduce((s, p) => s + p[0], 0) / 4;
     expect(centreN).toBeGreaterThan(0.3); // nose up: the camera looks forward
   });
+  it("follows the camera's mount", () => {
+    const centre = (fp: [number, number][]) => [fp.reduce((s, p) => s + p[0], 0) / 4, fp.reduce((s, p) => s + p[1], 0) / 4];
+    // pitched 20 degrees up on its mount, a level vehicle's camera looks ahead
+    const ahead = centre(cameraFootprint([0, 0, -2], 0, 0, 0, 60, 4 / 3, [0, 20, 0]) as [number, number][]);
+    expect(ahead[0]).toBeGreaterThan(0.5);
+    // the same as the vehicle pitched 20 degrees with a downward camera
+    const pitched = centre(cameraFootprint([0, 0, -2], 0, (20 * Math.PI) / 180, 0, 60, 4 / 3) as [number, number][]);
+    expect(ahead[0]).toBeCloseTo(pitched[0], 9);
+    // turned 90 degrees on its mount: the picture's top is the vehicle's right (east)
+    const turned = cameraFootprint([0, 0, -2], 0, 0, 0, 90, 2, [0, 0, 90]) as [number, number][];
+    expect(turned[0][1]).toBeCloseTo(1, 6);
+  });
   it("is null on the ground or when a ray misses the ground", () => {
     expect(cameraFootprint([0, 0, 0], 0, 0, 0, 60, 4 / 3)).toBeNull();
     expect(cameraFootprint([0, 0, -2], 0, 1.4, 0, 60, 4 / 3)).toBeNull();

@@ -211,6 +211,7 @@ def test_bad_settings_are_refused(client, body, words):
 def test_settings_change_and_show(client):
     before = client.get("/api/settings").json()
     assert before["record_frames"] is True and before["view_requires_token"] is False
+    assert before["camera_mount_deg"] == [0.0, 0.0, 0.0]  # (straight down, as not told)
     r = client.put("/api/settings", json={"jpeg_quality": 60}, headers=AUTH)
     assert r.status_code == 200 and r.json()["jpeg_quality"] == 60
     assert client.get("/api/settings").json()["jpeg_quality"] == 60
