@@ -41,6 +41,7 @@ from backend.recovery import recover
 from backend.services.abort import AbortService
 from backend.services.events import EventLog
 from backend.services.flights import FlightService
+from backend.services.mount_check import MountCheck
 from backend.services.params import ParamService
 from backend.services.perspective import PerspectiveDrafts
 from backend.services.references import ReferenceService
@@ -52,7 +53,7 @@ from backend.settings import Settings, resolve_token
 from backend.storage import Storage
 from backend.viewer3d import Viewer3D, ViewerFeed
 from backend.vision_worker import Processed, VisionWorker
-from pipeline import Camera, Reference
+from pipeline import Camera, FrameResult, Reference
 
 APPROACH_MARGIN = 0.8  # missions look for the pad this far under where it is reliably found
 
@@ -212,12 +213,19 @@ def build_station(settings: Settings) -> Station:
                 return {}
             return vision_hints(settings.pad_heading_deg, att.roll, att.pitch, att.yaw, mount)
 
+        mount_check = MountCheck(events.emit, settings.camera_mount)
+
+        def process(*args: Any, **kwargs: Any) -> FrameResult:
+            result = references.process(*args, **kwargs)
+            mount_check.observe(result)  # (the mount set, against the pad's pixels)
+            return result
+
         worker = VisionWorker(
             source,
             results,
             reference=references.current,
             camera=camera,
-            process=references.process,
+            process=process,
             hints=hints,
         )
         encoded: FrameBus[EncodedFrame] = FrameBus("encoded")

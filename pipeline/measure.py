@@ -115,13 +115,16 @@ class Measured:
     """``H``: pad metres -> frame pixels; ``fit``: the pose (OpenCV pad -> camera);
     ``support``: the share of the whole pad's edges found where the pose puts
     them; ``ambiguous``: another pose fits as well (see `_fit_pose`);
-    ``heading_told``: the pad's marks told its heading (see `_heading`)."""
+    ``heading_told``: the pad's marks told its heading (see `_heading`);
+    ``lean_deg``: with the attitude, how far the pixels alone lean the pad from its
+    level (see `_fit_pose`)."""
 
     H: np.ndarray
     fit: EdgeFit
     support: float
     ambiguous: bool
     heading_told: bool = False
+    lean_deg: float | None = None
 
 
 def measure(
@@ -191,14 +194,14 @@ def measure(
             enlarged=max(view.scale, 1.0),
         )
         if fitted is not None and (min_support is None or fitted[1] >= min_support):
-            fit, support, ambiguous = fitted
+            fit, support, ambiguous, lean = fitted
             if camera_height_m(fit.rvec, fit.tvec) <= 0.0:
                 continue  # (edges taken astray can fit a camera under the ground)
             if support < MIN_EDGES_FOUND and (
                 edge_support(levels, reference.h_edges, cam, fit.rvec, fit.tvec) < MIN_EDGES_FOUND
             ):
                 continue
-            return Measured(view.to_frame @ Hs, fit, support, ambiguous, told)
+            return Measured(view.to_frame @ Hs, fit, support, ambiguous, told, lean)
     return None
 
 
@@ -376,7 +379,7 @@ def _fit_pose(
     polish: bool,
     gravity: np.ndarray | None,
     enlarged: float = 1.0,
-) -> tuple[EdgeFit, float, bool] | None:
+) -> tuple[EdgeFit, float, bool, float | None] | None:
     """The camera's pose over the pad from the located homography, or None.
 
     The homography already holds every edge of the pad that was found; the
@@ -401,9 +404,11 @@ def _fit_pose(
     staying level; a hemmed rim then only where its hem is wide: see
     `Reference.polish_model`).
     Returns the fit, the share of the whole pad's edges found where the pose
-    puts them, and whether it is ambiguous.
+    puts them, whether it is ambiguous, and with the attitude how far the pixels
+    lean the pad from level within their noise (the check below; else None).
     """
     px = apply_h(H, pts_m)
+    lean: float | None = None
     cands = []
     for rvec0, tvec0 in ippe_candidates(pts_m, px, cam):
         cands.append((_rms(pts_m, px, cam, rvec0, tvec0), tilt_deg(rvec0), rvec0, tvec0))
@@ -434,7 +439,8 @@ def _fit_pose(
         # look-alike; on all the pad's points) ...
         sigma_px = POINT_SIGMA_PX * max(1.0, NOISE_SHOWN_PX_PER_RAD / shown)
         check, _ = refine_with_gravity(all_m, all_px, cam, rvec, tvec, gravity, sigma_px=sigma_px)
-        if tilt_from_level_deg(check, gravity) > MAX_LEAN_DEG:
+        lean = tilt_from_level_deg(check, gravity)
+        if lean > MAX_LEAN_DEG:
             return None
         # ... and the pose, with their bias as well (on ``pts_m``: points the
         # homography placed but no edge measured do not outweigh the attitude).
@@ -485,7 +491,7 @@ def _fit_pose(
                 fit, support = refined, better
     if gravity is not None and tilt_from_level_deg(fit.rvec, gravity) > MAX_LEAN_DEG:
         return None
-    return fit, support, ambiguous
+    return fit, support, ambiguous, lean
 
 
 def _span(px: np.ndarray) -> float:

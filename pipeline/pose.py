@@ -52,13 +52,18 @@ def tilt_deg(rvec: np.ndarray) -> float:
 
 
 def to_pose(
-    rvec: np.ndarray, tvec: np.ndarray, rms: float, symmetric: bool, ambiguous: bool = False
+    rvec: np.ndarray,
+    tvec: np.ndarray,
+    rms: float,
+    symmetric: bool,
+    ambiguous: bool = False,
+    lean_deg: float | None = None,
 ) -> Pose:
     """Turn OpenCV's pad->camera (rvec, tvec) into the camera's pose in the pad frame."""
     R_cam_pad, _ = cv2.Rodrigues(rvec)
     R_pad_cam = R_cam_pad.T
     position = -R_pad_cam @ np.asarray(tvec, np.float64).reshape(3)
-    return Pose(position, R_pad_cam, rms, symmetric, ambiguous)
+    return Pose(position, R_pad_cam, rms, symmetric, ambiguous, lean_deg)
 
 
 def camera_height_m(rvec: np.ndarray, tvec: np.ndarray) -> float:
@@ -95,6 +100,7 @@ def turned(pose: Pose, centre_m: np.ndarray | None = None) -> Pose:
         pose.reprojection_px,
         True,
         pose.ambiguous,
+        pose.lean_deg,  # (the twin lies as level)
     )
 
 

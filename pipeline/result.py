@@ -36,6 +36,11 @@ class Pose:
     to tell it within a few degrees (a small pad seen nearly head on, an H with
     no other mark found, with no ``gravity_hint`` to tell them apart), or no pose
     fits them within a hundredth of the pad's span (edges of something else taken).
+    ``lean_deg``: with a ``gravity_hint``, how far the pad's pixels alone lean it from
+    the level the hint gives (degrees; None without the hint). The pose is held near
+    that level; a lean that stays over a few degrees frame after frame says the hint
+    is off (the camera's mount is not the one the caller assumed) or the pad is not
+    level.
     """
 
     position_m: np.ndarray
@@ -43,6 +48,7 @@ class Pose:
     reprojection_px: float
     symmetric: bool
     ambiguous: bool = False
+    lean_deg: float | None = None
 
     @property
     def yaw_deg(self) -> float:
@@ -60,6 +66,7 @@ class Pose:
             "reprojection_px": float(self.reprojection_px),
             "symmetric": bool(self.symmetric),
             "ambiguous": bool(self.ambiguous),
+            "lean_deg": None if self.lean_deg is None else float(self.lean_deg),
         }
 
 

@@ -38,6 +38,12 @@ class Pose(Model):
         description="another pose, tilted the other way, fits the pixels as well, or "
         "they show the tilt too little to tell it (no attitude to tell them apart)"
     )
+    lean_deg: float | None = Field(
+        None,
+        description="with the vehicle's attitude, how far the pad's pixels alone lean it "
+        "from the level the attitude gives (degrees): over a few, frame after frame, the "
+        "camera's mount is not the one set, or the pad is not level",
+    )
 
 
 class FrameResult(Model):

@@ -1,7 +1,8 @@
-"""A camera mounted off straight down: the station's hints follow the mount it is told.
+"""A camera mounted off straight down: the station's hints follow the mount it is told,
+and the operator is told when the pad's pixels say the mount set is not the camera's.
 
 The attitude hint tells the pipeline which of a pad's poses lies level; a hint that
-puts the camera where it is not bends every pose toward the wrong level, unflagged.
+puts the camera where it is not bends every pose toward the wrong level.
 """
 
 from __future__ import annotations
@@ -10,7 +11,8 @@ import numpy as np
 import pytest
 
 from backend.frames import DOWN_MOUNT, mount_rotation, vision_hints
-from pipeline import Reference, process_frame
+from backend.services.mount_check import MIN_SEEN, WINDOW, MountCheck
+from pipeline import FrameResult, Pose, Reference, process_frame
 from pipeline.render import make_pad_image
 from sim.camera import PadRenderer, SimCameraConfig, VehiclePose
 
@@ -52,3 +54,64 @@ def test_a_pitched_camera_taken_for_a_downward_one_is_posed_wrong(seen):
     # What the mount setting is for: the same frames, the hint 8 degrees off, posed
     # 11-14 % of the height off (told the mount: 0.1-0.3 %).
     assert min(_errors(seen, DOWN_MOUNT)) > 0.05
+
+
+def _leans(views, mount, config, reference) -> list:
+    out = []
+    for frame, pose, _ in views:
+        hints = vision_hints(config.pad_heading_deg, pose.roll, pose.pitch, pose.yaw, mount)
+        out.append(process_frame(frame, reference, config.camera, **hints))
+    return out
+
+
+@pytest.fixture(scope="module")
+def hover():
+    """30 frames of the pitched camera over the pad, hovering at 2-5 m and turning."""
+    config = SimCameraConfig(pad_heading_deg=20.0, mount_rotation=mount_rotation(*PITCHED))
+    renderer = PadRenderer(config)
+    rng = np.random.default_rng(4)
+    views = []
+    for k in range(30):
+        north, east = rng.uniform(-1.0, 0.0), rng.uniform(-0.4, 0.4)
+        pose = VehiclePose(
+            (north, east, -rng.uniform(2.0, 5.0)), *rng.normal(0, 0.03, 2), 0.3 * k, 0.0
+        )
+        views.append((renderer.render(pose)[0], pose, None))
+    return views, Reference.from_image(make_pad_image(800), config.pad_size_m), config
+
+
+def test_the_operator_is_told_when_the_pads_pixels_lean_off_the_mount_set(hover):
+    views, reference, config = hover
+    told: list[tuple[str, str, dict]] = []
+    right = MountCheck(lambda *e: told.append(e), PITCHED)
+    for result in _leans(views, mount_rotation(*PITCHED), config, reference):
+        right.observe(result)
+    assert told == []  # (the mount set is the camera's)
+    wrong = MountCheck(lambda *e: told.append(e), (0.0, 0.0, 0.0))
+    for result in _leans(views, DOWN_MOUNT, config, reference):
+        wrong.observe(result)
+    assert len(told) == 1, told
+    kind, text, data = told[0]
+    assert kind == "vision" and "--camera-mount 0,0,0" in text
+    assert 6.0 < data["lean_deg"] < 10.0  # (the mount 8 degrees off)
+
+
+def _result(lean: float | None, detected: bool = True) -> FrameResult:
+    pose = Pose(np.array([0.0, 0.0, 3.0]), np.diag([1.0, -1.0, -1.0]), 0.1, True, False, lean)
+    return FrameResult(detected, np.zeros((12, 2)), (0.0,) * 7, 0.0, 0.0, pose, {})
+
+
+def test_the_mount_check_speaks_once_a_crossing_and_only_of_detections_with_the_attitude():
+    told: list[tuple] = []
+    check = MountCheck(lambda *e: told.append(e), (0.0, 0.0, 0.0))
+    for _ in range(MIN_SEEN - 1):
+        check.observe(_result(6.0))
+    check.observe(_result(None))  # (no attitude given: no lean)
+    check.observe(_result(9.0, detected=False))
+    assert told == []  # (too few yet)
+    for _ in range(WINDOW):
+        check.observe(_result(6.0))
+    assert [e[0] for e in told] == ["vision"]
+    for _ in range(WINDOW):
+        check.observe(_result(0.8))
+    assert len(told) == 2 and "level with the vehicle's attitude again" in told[1][1]
