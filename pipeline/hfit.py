@@ -143,7 +143,7 @@ def _fit_upright(
     )
     # Profiles put edges between cells (cell k spans [k, k + 1)); pixel centres
     # are integers in both the canvas and the picture.
-    back = R if lean is None else np.linalg.inv(R).T  # (a rotation's inverse: its transpose)
+    back = R if lean is None else np.linalg.inv(R).T  # (upright, R is a rotation)
     corners = (corners_c - 0.5 + lo) @ back + centre
     width, height = xr1 - xl0, y1 - y0
     return HFit(

@@ -244,11 +244,11 @@ def tophat_rise(light_contrast: float) -> float:
     """The rise of "tophat" for a pad whose paint stands ``light_contrast`` above its
     board on its picture (`log_light` levels).
 
-    On a probe pad of faded paint (gray 140 on 95: 18 levels), views of the bench's
-    real-world mix with a shadow across the pad or a glare on it lost its H at 16,
-    where gamma and glare leave it 25-35 % brighter than its board; 15 of 30 views were
-    found at 5-7 against 11. The ten designs' and the photos' references stand 54-107
-    above their boards: their rise stays 16."""
+    On a probe pad of faded paint (gray 140 on 95: 18 levels), 15 of 30 views of the
+    bench's real-world mix were found at 5-7 against 11 at 16: the four more, each
+    with a shadow's edge or band across the pad, which every threshold lost the H
+    in at 16. The ten designs' and the photos' references stand 54-107 above their
+    boards: their rise stays 16."""
     return max(MIN_TOPHAT_RISE, min(TOPHAT_RISE, TOPHAT_SHARE * light_contrast))
 
 

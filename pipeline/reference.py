@@ -77,7 +77,8 @@ class Reference:
     ``projection``: the colour channel in which the H is bright and its board
     dark (frames are searched on it). ``contrast``: H minus board on that
     channel; ``light_contrast``: the same on the light's log scale
-    (`pipeline.preprocess.log_light`). ``leg_fraction``: the thinner leg's width over the H's width.
+    (`pipeline.preprocess.log_light`). ``leg_fraction``: the thinner leg's width
+    over the H's width.
     ``lesser_hs``: the corners of the smaller marks of the H's paint shaped as an H
     (the letter H of a "HELIPAD" painted beside it): where the pad's H is hidden, one
     of them may pass for it, the pad posed several times too far (`pipeline.find`).

@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from backend.camera import CaptureError, ThreadedSource
-from backend.frames import DOWN_MOUNT, camera_in_pad, rot_ned_body, rot_ned_pad
+from backend.frames import DOWN_MOUNT, rot_ned_body, rot_ned_pad
 from pipeline.camera import Camera
 
 MIN_HEIGHT_M = 0.05  # a camera on the ground still sees a patch, never through it
@@ -143,9 +143,7 @@ def camera_pose_in_pad_frame(
     pad = np.array([config.pad_north_m, config.pad_east_m, config.pad_down_m])
     cam_ned = np.asarray(pose.position_ned, float) + R_nb @ np.asarray(config.mount_offset_m)
     position = R_np.T @ (cam_ned - pad)
-    R_pad_cam = camera_in_pad(
-        config.pad_heading_deg, pose.roll, pose.pitch, pose.yaw, np.asarray(config.mount_rotation)
-    )
+    R_pad_cam = R_np.T @ R_nb @ np.asarray(config.mount_rotation, float)
     return position, R_pad_cam
 
 
