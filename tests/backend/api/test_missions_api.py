@@ -150,3 +150,9 @@ def test_hover_then_abort_then_land_by_vision(client):
     runs = client.get("/api/missions").json()
     assert [r["outcome"] for r in runs[:2]] == ["landed", "aborted"]
     assert runs[0]["touchdown"]["error_m"] == touchdown["error_m"]
+    # The camera is on the mount the station was told: through the whole flight (its
+    # moves, the attitude a frame late), the pad's pixels never leant it off the
+    # attitude's level enough for the mount check to say otherwise.
+    stored = client.app.state.station.storage.recent_events(10_000)
+    said = [e for e in stored if e["kind"] == "vision"]
+    assert said == []
