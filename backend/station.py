@@ -29,12 +29,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
+import numpy as np
+
 from backend.camera import FrameSource, open_source
 from backend.datadir import prepare_data_dir
 from backend.encoder import EncodedFrame, FrameEncoder
 from backend.framebus import FrameBus
 from backend.frames import mount_rotation, vision_hints
 from backend.link import LinkEvent, VehicleLink
+from backend.missions import Mount
 from backend.missions.manager import MissionManager
 from backend.recorder import Recorder
 from backend.recovery import recover
@@ -192,17 +195,18 @@ def build_station(settings: Settings) -> Station:
             heartbeat_timeout_s=settings.link_timeout_s,
             command_timeout_s=settings.command_timeout_s,
         )
+        mount = mount_rotation(*settings.camera_mount)  # (R_body_cam)
         vehicle = VehicleService(
             link,
             settings,
             url=url,
+            mount=Mount(rotation=mount),
             # (the worker, started below, before any request can ask)
             approach_alt=lambda: approach_altitude(references.current(), worker.camera_seen()),
         )
 
         camera = _camera_model(settings)
-        mount = mount_rotation(*settings.camera_mount)  # (R_body_cam)
-        source = _open_camera(settings, camera, link, stand_in)
+        source = _open_camera(settings, camera, mount, link, stand_in)
         results: FrameBus[Processed] = FrameBus("results")
 
         def hints() -> dict[str, Any]:
@@ -394,7 +398,11 @@ def _start_stand_in(settings: Settings) -> StandIn:
 
 
 def _open_camera(
-    settings: Settings, camera: Camera, link: VehicleLink, stand_in: StandIn | None = None
+    settings: Settings,
+    camera: Camera,
+    mount: np.ndarray,
+    link: VehicleLink,
+    stand_in: StandIn | None = None,
 ) -> FrameSource:
     if settings.camera.partition(":")[0].lower() != "sim":
         return open_source(settings.camera)
@@ -425,7 +433,7 @@ def _open_camera(
         width=camera.width,
         height=camera.height,
         hfov_deg=camera.hfov_deg,
-        mount_rotation=mount_rotation(*settings.camera_mount),
+        mount_rotation=mount,
         seed=settings.sim_seed,
     )
     return SimCamera(vehicle_pose=vehicle_pose, config=config)

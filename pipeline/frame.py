@@ -276,8 +276,7 @@ def process_frame(
 def _first_look_reaches(reference: Reference, camera: Camera) -> bool:
     """Whether a first look through ``camera`` (the coarse view's) takes the pad's H
     from ``FIRST_LOOK_REACH_M`` away or farther (seen straight down)."""
-    size_m = float(np.ptp(reference.corners_m, axis=0).max())
-    return size_m * camera.fx / FIRST_LOOK_MIN_SPAN_PX >= FIRST_LOOK_REACH_M
+    return reference.h_size_m * camera.fx / FIRST_LOOK_MIN_SPAN_PX >= FIRST_LOOK_REACH_M
 
 
 def _in_turn(

@@ -188,7 +188,7 @@ class Reference:
     def pad_over_h(self) -> float:
         """The pad's width over its H's: how far around a mark the size of the H
         the pad reaches."""
-        return self.pad_size_m / float(np.ptp(self.corners_m, axis=0).max())
+        return self.pad_size_m / self.h_size_m
 
     @property
     def painted_marks(self) -> bool:

@@ -9,7 +9,6 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from backend.frames import mount_rotation
 from backend.link import CommandResult, LinkState, Telemetry, VehicleLink
 from backend.missions import LandConfig, Mount
 from backend.settings import Settings
@@ -28,11 +27,13 @@ class VehicleService:
         *,
         url: str,
         approach_alt: Callable[[], float | None] = lambda: None,
+        mount: Mount | None = None,
     ) -> None:
         self.link = link
         self.url = url
         self._settings = settings
         self._approach_alt = approach_alt
+        self._mount = mount or Mount()  # (the camera on the vehicle, for the missions)
 
     @property
     def telemetry(self) -> Telemetry:
@@ -77,6 +78,6 @@ class VehicleService:
             pad_north_m=s.pad_north,
             pad_east_m=s.pad_east,
             pad_heading_deg=s.pad_heading_deg,
-            mount=Mount(rotation=mount_rotation(*s.camera_mount)),
+            mount=self._mount,
             **changes,
         )

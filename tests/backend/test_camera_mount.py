@@ -38,9 +38,7 @@ def seen():
 def _errors(seen, mount: np.ndarray) -> list[float]:
     views, reference, config = seen
     out = []
-    for frame, pose, truth in views:
-        hints = vision_hints(config.pad_heading_deg, pose.roll, pose.pitch, pose.yaw, mount)
-        res = process_frame(frame, reference, config.camera, **hints)
+    for res, (_, _, truth) in zip(_leans(views, mount, config, reference), views, strict=True):
         assert res.detected and res.pose is not None, res.reason
         out.append(float(np.linalg.norm(res.pose.position_m - truth) / truth[2]))
     return out
@@ -57,6 +55,7 @@ def test_a_pitched_camera_taken_for_a_downward_one_is_posed_wrong(seen):
 
 
 def _leans(views, mount, config, reference) -> list:
+    """Each view's result, with the hints the station gives for ``mount``."""
     out = []
     for frame, pose, _ in views:
         hints = vision_hints(config.pad_heading_deg, pose.roll, pose.pitch, pose.yaw, mount)
