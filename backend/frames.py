@@ -10,6 +10,7 @@ faces, degrees clockwise from north.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -67,7 +68,7 @@ def camera_in_pad(
 
 def vision_hints(
     pad_heading_deg: float, roll: float, pitch: float, yaw: float, R_body_cam: np.ndarray
-) -> dict[str, object]:
+) -> dict[str, Any]:
     """``process_frame``'s hints from the vehicle's attitude (radians) and the camera's
     mount: the camera's yaw in the pad frame, which settles the H's half-turn, and
     down in the camera frame, which tells the pad's level pose from its tilted twin."""

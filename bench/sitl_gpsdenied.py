@@ -29,10 +29,11 @@ from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
+from backend.frames import vision_hints
 from backend.link import VehicleLink
 from backend.missions import LandConfig, TouchdownTruth, VisionSample
 from backend.missions.extnav import ExtNavLandMission
-from backend.missions.geometry import camera_yaw_hint, heading_error_deg
+from backend.missions.geometry import heading_error_deg
 from backend.services.events import EventLog
 from backend.services.params import ParamService
 from pipeline import Reference, process_frame
@@ -229,8 +230,13 @@ def _fly(
         w0 = time.perf_counter()
         image, _ = (blank if hidden_at is not None else renderer).render(pose)
         att = link.telemetry.attitude
-        hint = None if att is None else camera_yaw_hint(PAD_HEADING_DEG, att.yaw)
-        result = process_frame(image, reference, camera, yaw_hint=hint)
+        mount = cam_cfg.mount_rotation
+        hints = (
+            {}
+            if att is None
+            else vision_hints(PAD_HEADING_DEG, att.roll, att.pitch, att.yaw, mount)
+        )
+        result = process_frame(image, reference, camera, **hints)
         frame_times.append(time.perf_counter() - w0)
         sample = VisionSample(result, camera, t_capture, max(1, round(t_capture * 1e6)))
         mission.step(max(mission.now, obs.boot_s or 0.0), sample)

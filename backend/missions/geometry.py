@@ -27,13 +27,6 @@ def wrap90(deg: float) -> float:
     return (float(deg) + 90.0) % 180.0 - 90.0
 
 
-def camera_yaw_hint(pad_heading_deg: float, vehicle_yaw_rad: float) -> float:
-    """The down-looking camera's yaw in the pad frame (``pipeline.result.yaw_of``) from the
-    vehicle's heading alone: the ``yaw_hint`` that settles the H's 180-degree ambiguity
-    (the station's `backend.frames.vision_hints` for a level vehicle)."""
-    return wrap180(float(pad_heading_deg) - math.degrees(float(vehicle_yaw_rad)))
-
-
 def heading_error_deg(vehicle_yaw_deg: float, pad_heading_deg: float) -> float:
     """Vehicle heading minus pad heading, modulo the pad's 180-degree symmetry, in [-90, 90)."""
     return wrap90(vehicle_yaw_deg - pad_heading_deg)

@@ -24,6 +24,7 @@ from typing import Any
 
 import cv2
 
+from backend.frames import vision_hints
 from backend.link import DEFAULT_STREAM_RATES_HZ, LinkState, VehicleLink
 from backend.missions import (
     LandConfig,
@@ -33,7 +34,7 @@ from backend.missions import (
     VisionSample,
 )
 from backend.missions.extnav import ARMING_CHECK_ALL_BUT_VISION, EXTNAV_PARAMS, land_mission
-from backend.missions.geometry import camera_yaw_hint, heading_error_deg
+from backend.missions.geometry import heading_error_deg
 from pipeline import Reference, process_frame
 from pipeline.render import make_pad_image
 from sim.camera import PadRenderer, SimCameraConfig, VehiclePose
@@ -462,8 +463,11 @@ def _fly(
             else:
                 image, _ = renderer.render(pose)
             att = driver.link.telemetry.attitude
-            hint = None if att is None else camera_yaw_hint(cam_cfg.pad_heading_deg, att.yaw)
-            result = process_frame(image, reference, camera, yaw_hint=hint)
+            heading, mount = cam_cfg.pad_heading_deg, cam_cfg.mount_rotation
+            hints = (
+                {} if att is None else vision_hints(heading, att.roll, att.pitch, att.yaw, mount)
+            )
+            result = process_frame(image, reference, camera, **hints)
             pending.append(VisionSample(result, camera, t, driver.time_usec()))
         mission.step(t, sample)
         if after_step is not None:

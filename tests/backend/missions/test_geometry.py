@@ -90,16 +90,3 @@ def test_bad_inputs_raise_value_error():
         pad_fix(bad, CAM, (0.0, 0.0, 0.0), t_capture=0, time_usec=0)
     with pytest.raises(ValueError, match="mount_rotation"):
         pad_fix(good, CAM, (0, 0, 0), t_capture=0, time_usec=0, mount_rotation=np.eye(2))
-
-
-def test_yaw_hint_agrees_with_the_station_and_the_camera():
-    from backend.frames import DOWN_MOUNT, vision_hints
-    from backend.missions.geometry import camera_yaw_hint
-    from pipeline.result import yaw_of
-
-    for pad_heading, yaw in ((0.0, 0.0), (30.0, 1.0), (290.0, -2.5), (-45.0, 3.0)):
-        station = vision_hints(pad_heading, 0.0, 0.0, yaw, DOWN_MOUNT)["yaw_hint"]
-        assert wrap180(camera_yaw_hint(pad_heading, yaw) - station) == pytest.approx(0, abs=1e-9)
-        cfg = SimCameraConfig(pad_heading_deg=pad_heading)
-        _, R = camera_pose_in_pad_frame(VehiclePose((0.0, 0.0, -3.0), 0.0, 0.0, yaw, 0.0), cfg)
-        assert wrap180(yaw_of(R) - camera_yaw_hint(pad_heading, yaw)) == pytest.approx(0, abs=1e-9)
