@@ -58,6 +58,19 @@ def mount_rotation(roll_deg: float, pitch_deg: float, yaw_deg: float) -> np.ndar
     return rot_ned_body(r, p, y) @ DOWN_MOUNT
 
 
+def mount_angles(R_body_cam: np.ndarray) -> tuple[float, float, float]:
+    """The roll, pitch and yaw (degrees) of `mount_rotation` that give ``R_body_cam``.
+
+    >>> np.round(mount_angles(mount_rotation(-4.0, 7.5, 30.0)), 6).tolist()
+    [-4.0, 7.5, 30.0]
+    """
+    M = np.asarray(R_body_cam, np.float64) @ DOWN_MOUNT.T  # (rot_ned_body's form)
+    roll = math.atan2(M[2, 1], M[2, 2])
+    pitch = -math.asin(min(max(float(M[2, 0]), -1.0), 1.0))
+    yaw = math.atan2(M[1, 0], M[0, 0])
+    return (math.degrees(roll), math.degrees(pitch), math.degrees(yaw))
+
+
 def camera_in_pad(
     pad_heading_deg: float, roll: float, pitch: float, yaw: float, R_body_cam: np.ndarray
 ) -> np.ndarray:

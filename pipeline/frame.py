@@ -346,7 +346,7 @@ def _detected(
     # A pad whose heading this frame did not tell is reported as a symmetric one's.
     symmetric = reference.symmetric or not measured.heading_told
     found_pose = to_pose(
-        fit.rvec, fit.tvec, fit.rms_px, symmetric, measured.ambiguous, measured.lean_deg
+        fit.rvec, fit.tvec, fit.rms_px, symmetric, measured.ambiguous, measured.lean
     )
     # The twin is the H's: turned about its centre (its corners numbered 6 apart below).
     pose = pick_by_yaw(found_pose, yaw_hint, reference.h_centre_m)

@@ -32,6 +32,7 @@ from pipeline.pose import (
     camera_height_m,
     half_turn,
     ippe_candidates,
+    lean_rotation,
     project,
     refine_with_gravity,
     tilt_deg,
@@ -116,15 +117,15 @@ class Measured:
     ``support``: the share of the whole pad's edges found where the pose puts
     them; ``ambiguous``: another pose fits as well (see `_fit_pose`);
     ``heading_told``: the pad's marks told its heading (see `_heading`);
-    ``lean_deg``: with the attitude, how far the pixels alone lean the pad from its
-    level (see `_fit_pose`)."""
+    ``lean``: with the attitude, how the pixels alone lean the pad from its level
+    (`pipeline.pose.lean_rotation`, see `_fit_pose`)."""
 
     H: np.ndarray
     fit: EdgeFit
     support: float
     ambiguous: bool
     heading_told: bool = False
-    lean_deg: float | None = None
+    lean: np.ndarray | None = None
 
 
 def measure(
@@ -379,7 +380,7 @@ def _fit_pose(
     polish: bool,
     gravity: np.ndarray | None,
     enlarged: float = 1.0,
-) -> tuple[EdgeFit, float, bool, float | None] | None:
+) -> tuple[EdgeFit, float, bool, np.ndarray | None] | None:
     """The camera's pose over the pad from the located homography, or None.
 
     The homography already holds every edge of the pad that was found; the
@@ -404,11 +405,11 @@ def _fit_pose(
     staying level; a hemmed rim then only where its hem is wide: see
     `Reference.polish_model`).
     Returns the fit, the share of the whole pad's edges found where the pose
-    puts them, whether it is ambiguous, and with the attitude how far the pixels
-    lean the pad from level within their noise (the check below; else None).
+    puts them, whether it is ambiguous, and with the attitude how the homography
+    alone leans the pad from level (`pipeline.pose.lean_rotation`; else None).
     """
     px = apply_h(H, pts_m)
-    lean: float | None = None
+    lean: np.ndarray | None = None
     cands = []
     for rvec0, tvec0 in ippe_candidates(pts_m, px, cam):
         cands.append((_rms(pts_m, px, cam, rvec0, tvec0), tilt_deg(rvec0), rvec0, tvec0))
@@ -439,9 +440,12 @@ def _fit_pose(
         # look-alike; on all the pad's points) ...
         sigma_px = POINT_SIGMA_PX * max(1.0, NOISE_SHOWN_PX_PER_RAD / shown)
         check, _ = refine_with_gravity(all_m, all_px, cam, rvec, tvec, gravity, sigma_px=sigma_px)
-        lean = tilt_from_level_deg(check, gravity)
-        if lean > MAX_LEAN_DEG:
+        if tilt_from_level_deg(check, gravity) > MAX_LEAN_DEG:
             return None
+        # How the homography alone leans it: noisier frame to frame than the check, but
+        # not drawn toward level (by a camera pitched 8 degrees taken for a downward one,
+        # the check's were 6.3 degrees, these 8.0: the median of 40 views).
+        lean = lean_rotation(rvec, gravity)
         # ... and the pose, with their bias as well (on ``pts_m``: points the
         # homography placed but no edge measured do not outweigh the attitude).
         sigma_px = POINT_SIGMA_PX * max(1.0, TILT_SHOWN_PX_PER_RAD / shown)

@@ -57,13 +57,15 @@ def to_pose(
     rms: float,
     symmetric: bool,
     ambiguous: bool = False,
-    lean_deg: float | None = None,
+    lean: np.ndarray | None = None,
 ) -> Pose:
-    """Turn OpenCV's pad->camera (rvec, tvec) into the camera's pose in the pad frame."""
+    """Turn OpenCV's pad->camera (rvec, tvec) into the camera's pose in the pad frame
+    (``lean``: `lean_rotation`'s, of the pose the pixels alone give)."""
     R_cam_pad, _ = cv2.Rodrigues(rvec)
     R_pad_cam = R_cam_pad.T
     position = -R_pad_cam @ np.asarray(tvec, np.float64).reshape(3)
-    return Pose(position, R_pad_cam, rms, symmetric, ambiguous, lean_deg)
+    lean_deg = None if lean is None else _degrees(math.sqrt(float(lean @ lean)))
+    return Pose(position, R_pad_cam, rms, symmetric, ambiguous, lean_deg, lean)
 
 
 def camera_height_m(rvec: np.ndarray, tvec: np.ndarray) -> float:
@@ -101,6 +103,7 @@ def turned(pose: Pose, centre_m: np.ndarray | None = None) -> Pose:
         True,
         pose.ambiguous,
         pose.lean_deg,  # (the twin lies as level)
+        pose.lean_rotation,
     )
 
 
@@ -164,6 +167,23 @@ def tilt_from_level_deg(rvec: np.ndarray, gravity_cam: np.ndarray) -> float:
     n = pad_normal_in_camera(rvec)
     c = -float(np.dot(n, gravity_cam))
     return _degrees(math.acos(min(max(c, -1.0), 1.0)))
+
+
+def lean_rotation(rvec: np.ndarray, gravity_cam: np.ndarray) -> np.ndarray:
+    """The rotation (camera frame, a rotation vector in radians) that turns up as
+    ``gravity_cam`` gives it onto the pad's up under ``rvec``: how the pose leans the pad
+    from level, and which way (its length is `tilt_from_level_deg`'s angle).
+
+    >>> rvec, _ = cv2.Rodrigues(np.diag([1.0, -1.0, -1.0]))  # looking straight down
+    >>> tilted = np.array([math.sin(0.1), 0.0, math.cos(0.1)])  # down, 0.1 rad off
+    >>> (np.round(lean_rotation(rvec, tilted), 6) + 0.0).tolist()  # (about the camera's y)
+    [0.0, -0.1, 0.0]
+    """
+    up = -np.asarray(gravity_cam, np.float64).reshape(3)
+    n = pad_normal_in_camera(rvec)
+    axis = np.cross(up, n)
+    s = math.sqrt(float(axis @ axis))
+    return axis * (math.atan2(s, float(up @ n)) / s) if s > 1e-12 else np.zeros(3)
 
 
 def _degrees(radians: float) -> float:

@@ -36,11 +36,13 @@ class Pose:
     to tell it within a few degrees (a small pad seen nearly head on, an H with
     no other mark found, with no ``gravity_hint`` to tell them apart), or no pose
     fits them within a hundredth of the pad's span (edges of something else taken).
-    ``lean_deg``: with a ``gravity_hint``, how far the pad's pixels alone lean it from
-    the level the hint gives (degrees; None without the hint). The pose is held near
-    that level; a lean that stays over a few degrees frame after frame says the hint
-    is off (the camera's mount is not the one the caller assumed) or the pad is not
-    level.
+    ``lean_rotation``: with a ``gravity_hint``, how the pad's pixels alone lean it
+    from the level the hint gives: the rotation (camera frame, a rotation vector in
+    radians) that turns down as the hint gives it onto down as the pixels give it;
+    ``lean_deg``: its angle (degrees). Both None without the hint. The pose is held
+    near that level; frame to frame the lean is the pixels' noise, a degree or two,
+    but one that stays, frame after frame, says the hint is off (the camera's mount is
+    not the one the caller assumed) or the pad is not level.
     """
 
     position_m: np.ndarray
@@ -49,6 +51,7 @@ class Pose:
     symmetric: bool
     ambiguous: bool = False
     lean_deg: float | None = None
+    lean_rotation: np.ndarray | None = None
 
     @property
     def yaw_deg(self) -> float:
@@ -67,6 +70,9 @@ class Pose:
             "symmetric": bool(self.symmetric),
             "ambiguous": bool(self.ambiguous),
             "lean_deg": None if self.lean_deg is None else float(self.lean_deg),
+            "lean_rotation": None
+            if self.lean_rotation is None
+            else [float(v) for v in self.lean_rotation],
         }
 
 

@@ -44,6 +44,13 @@ class Pose(Model):
         "from the level the attitude gives (degrees): over a few, frame after frame, the "
         "camera's mount is not the one set, or the pad is not level",
     )
+    lean_rotation: list[float] | None = Field(
+        None,
+        description="that lean as a rotation (camera frame, a rotation vector in radians) "
+        "turning down as the attitude gives it onto down as the pad's pixels alone give it",
+        min_length=3,
+        max_length=3,
+    )
 
 
 class FrameResult(Model):

@@ -63,10 +63,11 @@ def _leans(views, mount, config, reference) -> list:
     return out
 
 
-@pytest.fixture(scope="module")
-def hover():
-    """30 frames of the pitched camera over the pad, hovering at 2-5 m and turning."""
-    config = SimCameraConfig(pad_heading_deg=20.0, mount_rotation=mount_rotation(*PITCHED))
+@pytest.fixture(scope="module", params=[PITCHED, (-6.0, 3.0, 25.0)], ids=["pitched", "rolled"])
+def hover(request):
+    """30 frames of a camera off straight down (the pitched one, and one rolled, pitched
+    and turned) over the pad, hovering at 2-5 m and turning; and its mount."""
+    config = SimCameraConfig(pad_heading_deg=20.0, mount_rotation=mount_rotation(*request.param))
     renderer = PadRenderer(config)
     rng = np.random.default_rng(4)
     views = []
@@ -76,14 +77,15 @@ def hover():
             (north, east, -rng.uniform(2.0, 5.0)), *rng.normal(0, 0.03, 2), 0.3 * k, 0.0
         )
         views.append((renderer.render(pose)[0], pose, None))
-    return views, Reference.from_image(make_pad_image(800), config.pad_size_m), config
+    reference = Reference.from_image(make_pad_image(800), config.pad_size_m)
+    return views, reference, config, request.param
 
 
 def test_the_operator_is_told_when_the_pads_pixels_lean_off_the_mount_set(hover):
-    views, reference, config = hover
+    views, reference, config, mount = hover
     told: list[tuple[str, str, dict]] = []
-    right = MountCheck(lambda *e: told.append(e), PITCHED)
-    for result in _leans(views, mount_rotation(*PITCHED), config, reference):
+    right = MountCheck(lambda *e: told.append(e), mount)
+    for result in _leans(views, mount_rotation(*mount), config, reference):
         right.observe(result)
     assert told == []  # (the mount set is the camera's)
     wrong = MountCheck(lambda *e: told.append(e), (0.0, 0.0, 0.0))
@@ -92,11 +94,18 @@ def test_the_operator_is_told_when_the_pads_pixels_lean_off_the_mount_set(hover)
     assert len(told) == 1, told
     kind, text, data = told[0]
     assert kind == "vision" and "--camera-mount 0,0,0" in text
-    assert 6.0 < data["lean_deg"] < 10.0  # (the mount 8 degrees off)
+    off = np.degrees(np.arccos(mount_rotation(*mount)[:, 2] @ DOWN_MOUNT[:, 2]))
+    assert 0.75 * off < data["lean_deg"] < 1.25 * off
+    # ... and which mount the pixels put the camera on (its yaw not seen: the one set)
+    roll, pitch, yaw = data["suggested_mount_deg"]
+    assert roll == pytest.approx(mount[0], abs=1.0) and pitch == pytest.approx(mount[1], abs=1.0)
+    assert yaw == 0.0 and f"--camera-mount {roll:g},{pitch:g},0 " in text
 
 
 def _result(lean: float | None, detected: bool = True) -> FrameResult:
-    pose = Pose(np.array([0.0, 0.0, 3.0]), np.diag([1.0, -1.0, -1.0]), 0.1, True, False, lean)
+    """A result whose pixels lean the pad ``lean`` degrees about the camera's x."""
+    turn = None if lean is None else np.array([np.radians(lean), 0.0, 0.0])
+    pose = Pose(np.array([0.0, 0.0, 3.0]), np.diag([1.0, -1.0, -1.0]), 0.1, True, False, lean, turn)
     return FrameResult(detected, np.zeros((12, 2)), (0.0,) * 7, 0.0, 0.0, pose, {})
 
 

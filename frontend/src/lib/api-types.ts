@@ -1894,6 +1894,12 @@ export interface components {
              * @default null
              */
             lean_deg: number | null;
+            /**
+             * Lean Rotation
+             * @description that lean as a rotation (camera frame, a rotation vector in radians) turning down as the attitude gives it onto down as the pad's pixels alone give it
+             * @default null
+             */
+            lean_rotation: number[] | null;
             /** Position M */
             position_m: [
                 number,
