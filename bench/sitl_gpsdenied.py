@@ -29,9 +29,9 @@ from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
-from backend.frames import vision_hints
+from backend.frames import mount_rotation, vision_hints
 from backend.link import VehicleLink
-from backend.missions import LandConfig, TouchdownTruth, VisionSample
+from backend.missions import LandConfig, Mount, TouchdownTruth, VisionSample
 from backend.missions.extnav import ExtNavLandMission
 from backend.missions.geometry import heading_error_deg
 from backend.services.events import EventLog
@@ -49,6 +49,8 @@ CAMERA_HZ = 15.0
 HIDE_BELOW_M = 2.5
 #: bars (issue 12): 10/10, true touchdown median <= 10 cm, max <= 20 cm
 BAR_MEDIAN_M, BAR_MAX_M = 0.10, 0.20
+
+Angles = tuple[float, float, float]  # degrees: roll, pitch, yaw
 
 
 class RunError(RuntimeError):
@@ -79,8 +81,11 @@ def _reached(obs: SitlObserver, boot_s: float) -> Callable[[], bool]:
     return lambda: (obs.boot_s or 0.0) >= boot_s
 
 
-def _camera_config(seed: int, snr_db: float, ground_d: float = 0.0) -> SimCameraConfig:
+def _camera_config(
+    seed: int, snr_db: float, ground_d: float = 0.0, mount_deg: Angles = (0.0, 0.0, 0.0)
+) -> SimCameraConfig:
     return SimCameraConfig(
+        mount_rotation=mount_rotation(*mount_deg),
         pad_north_m=PAD_NE[0],
         pad_east_m=PAD_NE[1],
         pad_down_m=ground_d,
@@ -114,10 +119,13 @@ def fly_once(
     speedup: float = 1.0,
     pad_lost: bool = False,
     snr_db: float = 25.0,
+    mount_deg: Angles = (0.0, 0.0, 0.0),
 ) -> dict[str, Any]:
     """One fresh SITL: set up, take off on GPS, land with the extnav mission, GPS off over
-    the pad; returns the run's figures (``error`` when a set-up step failed)."""
-    out: dict[str, Any] = {"seed": seed, "pad_lost": pad_lost}
+    the pad; returns the run's figures (``error`` when a set-up step failed).
+    ``mount_deg``: the camera's mount, as ``--camera-mount`` takes it (the station is
+    told it, as the mission)."""
+    out: dict[str, Any] = {"seed": seed, "pad_lost": pad_lost, "camera_mount_deg": mount_deg}
     wall0 = time.monotonic()
     with Sitl(speedup=boot_speedup) as sitl:
         link = VehicleLink(sitl.url)
@@ -125,7 +133,7 @@ def fly_once(
         link.start()
         obs.start()
         try:
-            out.update(_fly(link, obs, seed, boot_speedup, speedup, pad_lost, snr_db))
+            out.update(_fly(link, obs, seed, boot_speedup, speedup, pad_lost, snr_db, mount_deg))
         except (RunError, SitlError) as exc:
             out["error"] = str(exc)
         finally:
@@ -143,6 +151,7 @@ def _fly(
     speedup: float,
     pad_lost: bool,
     snr_db: float,
+    mount_deg: Angles,
 ) -> dict[str, Any]:
     out: dict[str, Any] = {}
     if not _wait_link(link, True, 30):
@@ -193,6 +202,7 @@ def _fly(
         pad_down_m=pad_down,
         pad_heading_deg=PAD_HEADING_DEG,
         approach_alt_m=TAKEOFF_M,
+        mount=Mount(rotation=mount_rotation(*mount_deg)),
     )
 
     def touchdown() -> TouchdownTruth | None:
@@ -201,7 +211,7 @@ def _fly(
             return None
         return TouchdownTruth(t.position_ned[0], t.position_ned[1], math.degrees(t.yaw))
 
-    cam_cfg = _camera_config(seed, snr_db, ground_d)
+    cam_cfg = _camera_config(seed, snr_db, ground_d, mount_deg)
     renderer = PadRenderer(cam_cfg)
     blank = PadRenderer(replace(cam_cfg, pad_north_m=cam_cfg.pad_north_m + 1e4))
     camera = cam_cfg.camera
@@ -306,6 +316,16 @@ def summarize(runs: list[dict[str, Any]], pad_lost: bool) -> dict[str, Any]:
     return summary
 
 
+def _angles(text: str) -> Angles:
+    try:
+        roll, pitch, yaw = (float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected ROLL,PITCH,YAW in degrees, got {text!r}"
+        ) from None
+    return (roll, pitch, yaw)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m bench.sitl_gpsdenied", description=__doc__)
     parser.add_argument("--runs", type=int, default=10)
@@ -313,6 +333,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--boot-speedup", type=float, default=10.0)
     parser.add_argument("--pad-lost", action="store_true", help="hide the pad at 2.5 m")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--camera-mount",
+        type=_angles,
+        default=(0.0, 0.0, 0.0),
+        metavar="ROLL,PITCH,YAW",
+        help="the camera's mount in degrees, as the station's --camera-mount",
+    )
     args = parser.parse_args(argv)
     if args.runs < 1:
         parser.error("--runs must be >= 1")
@@ -328,6 +355,7 @@ def main(argv: list[str] | None = None) -> int:
             boot_speedup=args.boot_speedup,
             speedup=args.speedup,
             pad_lost=args.pad_lost,
+            mount_deg=args.camera_mount,
         )
         runs.append(run)
         print(

@@ -33,6 +33,18 @@ def test_gps_lost_over_the_pad_lands_on_vision():
     assert not [t for t in run["texts"] if t.startswith(("EKF variance", "EKF Failsafe"))]
 
 
+def test_a_camera_pitched_ahead_told_its_mount_lands_on_vision():
+    # The camera looks 12 degrees ahead of straight down, and the station is told: the
+    # pipeline's hints and the mission's geometry both go through the mount. (Taken for
+    # a downward camera, its poses would be held 12 degrees off their level.)
+    run = fly_once(seed=3, mount_deg=(0.0, 12.0, 0.0))
+    assert "error" not in run, run
+    assert run["outcome"] == "landed", run
+    assert "on vision navigation (ExternalNav)" in run["message"]
+    assert run["touchdown_error_m"] < 0.20
+    assert run["vision_positions_sent"] > 50
+
+
 def test_pad_lost_without_gps_lands_in_place_and_says_so():
     run = fly_once(seed=2, pad_lost=True)
     assert "error" not in run, run
