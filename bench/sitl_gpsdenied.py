@@ -223,6 +223,7 @@ def _fly(
     hidden_at: tuple[float, float, float] | None = None
     next_frame = boot
     frame_times: list[float] = []
+    mount = cam_cfg.mount_rotation
     limit = time.monotonic() + _wall(config.timeout_s, speedup)
     while not mission.done:
         if time.monotonic() > limit:
@@ -240,7 +241,6 @@ def _fly(
         w0 = time.perf_counter()
         image, _ = (blank if hidden_at is not None else renderer).render(pose)
         att = link.telemetry.attitude
-        mount = cam_cfg.mount_rotation
         hints = (
             {}
             if att is None

@@ -446,6 +446,7 @@ def _fly(
     camera = cam_cfg.camera
     reference = _reference()
     dt = 1.0 / camera_hz
+    heading, mount = cam_cfg.pad_heading_deg, cam_cfg.mount_rotation
     pending: deque[VisionSample] = deque()
     while not mission.done:
         driver.advance(dt)
@@ -463,7 +464,6 @@ def _fly(
             else:
                 image, _ = renderer.render(pose)
             att = driver.link.telemetry.attitude
-            heading, mount = cam_cfg.pad_heading_deg, cam_cfg.mount_rotation
             hints = (
                 {} if att is None else vision_hints(heading, att.roll, att.pitch, att.yaw, mount)
             )
