@@ -57,7 +57,14 @@ _FLAGS: dict[str, tuple[str, type, str]] = {
         "camera_mount",
         str,
         "the camera's turn from looking straight down, picture top to the nose: "
-        "roll,pitch,yaw in degrees, as the vehicle's (default 0,0,0)",
+        "roll,pitch,yaw in degrees, as the vehicle's (default 0,0,0; or as last set "
+        "from the dashboard)",
+    ),
+    "--sim-camera-mount": (
+        "sim_camera_mount",
+        str,
+        "where the simulated camera truly sits, when not on the mount the station is "
+        "told (default: that one, as it is at start)",
     ),
     "--reference": ("reference", str, "picture of the pad, cropped to its edge"),
     "--pad-size": ("pad_size", float, "pad width in metres (default 0.55)"),

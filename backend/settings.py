@@ -33,7 +33,9 @@ class Settings(BaseSettings):
     to besides its own (comma-separated in the environment and on the command line).
     """
 
-    model_config = SettingsConfigDict(env_prefix="VISLAND_", extra="ignore")
+    # A blank variable is not given (compose passes every one through, blank when unset):
+    # what the operator set at run time then holds (`backend.services.runtime`).
+    model_config = SettingsConfigDict(env_prefix="VISLAND_", extra="ignore", env_ignore_empty=True)
 
     host: str = "127.0.0.1"
     port: int = Field(8000, ge=0, le=65535)
@@ -46,7 +48,11 @@ class Settings(BaseSettings):
     # nose: roll, pitch and yaw in degrees, as the vehicle's own (`backend.frames.
     # mount_rotation`). The attitude hint is only as right as this: a camera 6 degrees
     # off what is set here put the design bench's poses 8 % of the altitude off.
+    # The operator may change it while the station runs (`PUT /api/settings`, kept).
     camera_mount: Annotated[tuple[float, float, float], NoDecode] = (0.0, 0.0, 0.0)
+    # Where the simulated camera truly sits, when not where the station is told at start
+    # (to see the mount check tell it): it does not follow a mount set at run time.
+    sim_camera_mount: Annotated[tuple[float, float, float] | None, NoDecode] = None
     reference: Path | None = None
     pad_size: float = Field(DEFAULT_PAD_SIZE_M, gt=0, le=MAX_PAD_SIZE_M)
     # Where the pad lies in the vehicle's local frame (metres from home) and where its
@@ -110,7 +116,7 @@ class Settings(BaseSettings):
                 raise ValueError(f"{origin!r} is not an origin (e.g. https://gcs.example:8443)")
         return value
 
-    @field_validator("camera_mount", mode="before")
+    @field_validator("camera_mount", "sim_camera_mount", mode="before")
     @classmethod
     def _mount_angles(cls, value: object) -> object:
         if isinstance(value, str):
@@ -120,25 +126,17 @@ class Settings(BaseSettings):
                 angles = ()
             if len(angles) != 3:
                 raise ValueError(
-                    f"camera_mount must be roll,pitch,yaw in degrees (e.g. 0,10,0), got {value!r}"
+                    f"a camera mount is roll,pitch,yaw in degrees (e.g. 0,10,0), got {value!r}"
                 )
             return angles
         return value
 
-    @field_validator("camera_mount")
+    @field_validator("camera_mount", "sim_camera_mount")
     @classmethod
-    def _mount_in_range(cls, value: tuple[float, float, float]) -> tuple[float, float, float]:
-        roll, pitch, yaw = value
-        if not all(math.isfinite(a) for a in value):
-            raise ValueError("camera_mount's angles must be finite")
-        if abs(roll) > MAX_MOUNT_TILT_DEG or abs(pitch) > MAX_MOUNT_TILT_DEG:
-            raise ValueError(
-                f"camera_mount's roll and pitch must be within {MAX_MOUNT_TILT_DEG:g} degrees "
-                "of looking straight down (the pad is searched for below the vehicle)"
-            )
-        if abs(yaw) > 180:
-            raise ValueError("camera_mount's yaw must be within -180..180 degrees")
-        return value
+    def _mount_in_range(
+        cls, value: tuple[float, float, float] | None
+    ) -> tuple[float, float, float] | None:
+        return None if value is None else check_mount(value)
 
     @field_validator("token")
     @classmethod
@@ -179,6 +177,30 @@ class Settings(BaseSettings):
         if len(key) != 32:
             raise ValueError("signing_key must be 32 bytes (64 hex digits)")
         return value
+
+
+def check_mount(angles: tuple[float, float, float]) -> tuple[float, float, float]:
+    """A camera mount's roll, pitch and yaw (degrees) as given; ``ValueError`` saying why
+    it cannot be one.
+
+    >>> check_mount((0, 8.5, -90))
+    (0.0, 8.5, -90.0)
+    >>> check_mount((0.0, 60.0, 0.0))
+    Traceback (most recent call last):
+    ...
+    ValueError: a camera mount's roll and pitch must be within 45 degrees of looking ...
+    """
+    roll, pitch, yaw = (float(a) for a in angles)
+    if not all(math.isfinite(a) for a in (roll, pitch, yaw)):
+        raise ValueError("a camera mount's angles must be finite")
+    if abs(roll) > MAX_MOUNT_TILT_DEG or abs(pitch) > MAX_MOUNT_TILT_DEG:
+        raise ValueError(
+            f"a camera mount's roll and pitch must be within {MAX_MOUNT_TILT_DEG:g} degrees "
+            "of looking straight down (the pad is searched for below the vehicle)"
+        )
+    if abs(yaw) > 180:
+        raise ValueError("a camera mount's yaw must be within -180..180 degrees")
+    return roll, pitch, yaw
 
 
 @lru_cache(maxsize=1)

@@ -195,18 +195,23 @@ def build_station(settings: Settings) -> Station:
             heartbeat_timeout_s=settings.link_timeout_s,
             command_timeout_s=settings.command_timeout_s,
         )
-        mount = mount_rotation(*settings.camera_mount)  # (R_body_cam)
+        # The camera's mount as the station is told it, which the operator may set anew
+        # while it runs: the hints follow it frame by frame, the missions from their
+        # start, the mount check and the 3D view at once.
         vehicle = VehicleService(
             link,
             settings,
             url=url,
-            mount=Mount(rotation=mount),
+            mount=lambda: Mount(rotation=runtime.mount_rotation),
             # (the worker, started below, before any request can ask)
             approach_alt=lambda: approach_altitude(references.current(), worker.camera_seen()),
         )
 
         camera = _camera_model(settings)
-        source = _open_camera(settings, camera, mount, link, stand_in)
+        # (the simulated camera sits where it was put at start; a mount set later is the
+        # station's belief, which the mount check weighs against the pixels)
+        true_mount = settings.sim_camera_mount or runtime.camera_mount
+        source = _open_camera(settings, camera, mount_rotation(*true_mount), link, stand_in)
         results: FrameBus[Processed] = FrameBus("results")
 
         def hints() -> dict[str, Any]:
@@ -215,9 +220,19 @@ def build_station(settings: Settings) -> Station:
             att = link.telemetry.attitude
             if att is None:
                 return {}
-            return vision_hints(settings.pad_heading_deg, att.roll, att.pitch, att.yaw, mount)
+            return vision_hints(
+                settings.pad_heading_deg, att.roll, att.pitch, att.yaw, runtime.mount_rotation
+            )
 
-        mount_check = MountCheck(events.emit, settings.camera_mount)
+        mount_check = MountCheck(events.emit, runtime.camera_mount)
+
+        runtime.listen(
+            lambda changes: (
+                mount_check.set_mount(runtime.camera_mount)
+                if "camera_mount_deg" in changes
+                else None
+            )
+        )
 
         def process(*args: Any, **kwargs: Any) -> FrameResult:
             result = references.process(*args, **kwargs)
@@ -260,11 +275,18 @@ def build_station(settings: Settings) -> Station:
                 pad_heading_deg=settings.pad_heading_deg,
                 camera_hfov_deg=camera.hfov_deg,
                 aspect=camera.width / camera.height,
-                mount_rotation=mount,
+                mount_rotation=runtime.mount_rotation,
             )
             viewer_feed = ViewerFeed(viewer, lambda: link.telemetry, results)
             shown = viewer
             references.listen(lambda a: shown.set_pad(a.reference.image, a.reference.pad_size_m))
+            runtime.listen(
+                lambda changes: (
+                    shown.set_mount(runtime.mount_rotation)
+                    if "camera_mount_deg" in changes
+                    else None
+                )
+            )
 
         rejections = Rejections()
         status = StatusService(

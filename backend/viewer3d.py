@@ -230,6 +230,13 @@ class Viewer3D:
             self._h["pad"].remove()
             self._h["pad"] = self._add_pad()
 
+    def set_mount(self, mount_rotation: np.ndarray) -> None:
+        """Turn the camera on the vehicle to the mount now set (``R_body_cam``)."""
+        with self._lock:
+            self._mount = np.asarray(mount_rotation, float)
+            if self._server is not None:
+                self._h["camera"].wxyz = _wxyz(self._mount)
+
     def update(
         self,
         *,

@@ -35,6 +35,9 @@ def test_gcs_environment_and_data_volume(compose):
     assert env["VISLAND_DATA_DIR"] == "/data"
     assert env["VISLAND_HOST"] == "0.0.0.0"  # inside the container; published on loopback
     assert env["VISLAND_MAVLINK"] == "${VISLAND_MAVLINK:-}"  # empty: the built-in stand-in
+    # blank unless given: what the operator sets at run time is kept across restarts
+    for key in ("VISLAND_CAMERA_MOUNT", "VISLAND_VIEW_REQUIRES_TOKEN"):
+        assert env[key] == f"${{{key}:-}}", key
     assert "visland-data:/data" in gcs["volumes"]
     assert "visland-data" in compose["volumes"]
     assert all(k.startswith("VISLAND_") for k in env)

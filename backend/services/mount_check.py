@@ -50,6 +50,15 @@ class MountCheck:
         self._warned = False
         self._lock = threading.Lock()
 
+    def set_mount(self, mount_deg: tuple[float, float, float]) -> None:
+        """Judge against a mount set anew: the leans seen so far were against the old
+        one's level, and what was said of it is moot."""
+        with self._lock:
+            self._mount_deg = mount_deg
+            self._mount = _flag(mount_deg)
+            self._leans.clear()
+            self._warned = False
+
     def observe(self, result: FrameResult) -> None:
         """Take one frame's result (any thread)."""
         pose = result.pose

@@ -27,13 +27,13 @@ class VehicleService:
         *,
         url: str,
         approach_alt: Callable[[], float | None] = lambda: None,
-        mount: Mount | None = None,
+        mount: Callable[[], Mount] = Mount,
     ) -> None:
         self.link = link
         self.url = url
         self._settings = settings
         self._approach_alt = approach_alt
-        self._mount = mount or Mount()  # (the camera on the vehicle, for the missions)
+        self._mount = mount  # (the camera on the vehicle as now set, for the missions)
 
     @property
     def telemetry(self) -> Telemetry:
@@ -78,6 +78,6 @@ class VehicleService:
             pad_north_m=s.pad_north,
             pad_east_m=s.pad_east,
             pad_heading_deg=s.pad_heading_deg,
-            mount=self._mount,
+            mount=self._mount(),
             **changes,
         )

@@ -123,3 +123,17 @@ def test_the_mount_check_speaks_once_a_crossing_and_only_of_detections_with_the_
     for _ in range(WINDOW):
         check.observe(_result(0.8))
     assert len(told) == 2 and "level with the vehicle's attitude again" in told[1][1]
+
+
+def test_a_mount_set_anew_is_judged_afresh():
+    told: list[tuple] = []
+    check = MountCheck(lambda *e: told.append(e), (0.0, 0.0, 0.0))
+    for _ in range(WINDOW):
+        check.observe(_result(6.0))
+    assert len(told) == 1 and "--camera-mount 0,0,0" in told[0][1]
+    check.set_mount((6.0, 0.0, 0.0))
+    for _ in range(MIN_SEEN - 1):  # (the old mount's leans are gone: too few yet)
+        check.observe(_result(6.0))
+    assert len(told) == 1
+    check.observe(_result(6.0))  # (still leaning: told again, of the mount now set)
+    assert len(told) == 2 and "--camera-mount 6,0,0" in told[1][1]

@@ -37,6 +37,12 @@ def test_env_prefix(monkeypatch):
 def test_blank_env_means_not_given(monkeypatch):
     monkeypatch.setenv("VISLAND_MAVLINK", "")
     assert Settings().mavlink is None
+    # ... so that what the operator set at run time holds (docker-compose.yml's blanks)
+    monkeypatch.setenv("VISLAND_CAMERA_MOUNT", "")
+    monkeypatch.setenv("VISLAND_VIEW_REQUIRES_TOKEN", "")
+    given = Settings().model_fields_set
+    assert Settings().camera_mount == (0.0, 0.0, 0.0) and "camera_mount" not in given
+    assert "view_requires_token" not in given
 
 
 @pytest.mark.parametrize(
@@ -98,6 +104,12 @@ def test_the_camera_mount_comes_from_the_environment_or_a_flag(monkeypatch):
     assert Settings().camera_mount == (1.5, -8.0, 90.0)
     args = build_parser().parse_args(["serve", "--camera-mount", "0,12,180"])
     assert settings_from_args(args).camera_mount == (0.0, 12.0, 180.0)
+    # The simulated camera sits where the station is told, unless put elsewhere.
+    assert settings_from_args(args).sim_camera_mount is None
+    args = build_parser().parse_args(["serve", "--sim-camera-mount", "0,8,0"])
+    assert settings_from_args(args).sim_camera_mount == (0.0, 8.0, 0.0)
+    with pytest.raises(ValidationError, match="within 45 degrees"):
+        Settings(sim_camera_mount="50,0,0")
 
 
 def test_get_settings_is_cached_and_overridable(monkeypatch):

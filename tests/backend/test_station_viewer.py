@@ -81,6 +81,10 @@ def test_viser_serves_the_scene_and_takes_updates():
         assert np.allclose(right, [math.cos(psi), -math.sin(psi), 0.0])
         # The vision frame sits over the pad: pad origin + 2 m up.
         assert np.allclose(viewer._h["vision"].position, [-2.0, 1.0, 2.0])
+        # The camera on the vehicle turns to a mount set while running.
+        viewer.set_mount(mount_rotation(0.0, 10.0, 0.0))
+        R_body_cam = tf.SO3(np.asarray(viewer._h["camera"].wxyz)).as_matrix()
+        assert np.allclose(R_body_cam, mount_rotation(0.0, 10.0, 0.0))
     finally:
         viewer.close()
     viewer.close()  # idempotent

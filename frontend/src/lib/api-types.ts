@@ -684,7 +684,9 @@ export interface paths {
         get: operations["get_settings_api_settings_get"];
         /**
          * Put Settings
-         * @description Change settings (stored at once, so they hold after a restart).
+         * @description Change settings (stored at once, so they hold after a restart). The camera's
+         *     mount is refused (409) while a mission flies: it took the mount at its start, and
+         *     the vision's hints would turn under it.
          */
         put: operations["put_settings_api_settings_put"];
         post?: never;
@@ -2216,6 +2218,11 @@ export interface components {
          * @description Only the fields given change; unknown fields are refused.
          */
         SettingsUpdate: {
+            /**
+             * Camera Mount Deg
+             * @description roll, pitch, yaw in degrees: how the camera is turned from looking straight down with its picture's top to the nose (as `--camera-mount`); the attitude hints follow at once, missions from their next start
+             */
+            camera_mount_deg?: number[] | null;
             /** Jpeg Quality */
             jpeg_quality?: number | null;
             /** Record Frames */
@@ -4684,6 +4691,15 @@ export interface operations {
             };
             /** @description The operator token is missing or wrong. */
             401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorResponse"];
+                };
+            };
+            /** @description Refused: the vehicle said no (its reasons verbatim), or the state forbids it. */
+            409: {
                 headers: {
                     [name: string]: unknown;
                 };

@@ -4,6 +4,7 @@
 
 import type { components } from "./api-types";
 import { plainValidation, sentence } from "./messages";
+import type { Mount } from "./mount";
 import type { CommandResult, ReferenceSummary, Status, Telemetry } from "./protocol";
 
 type S = components["schemas"];
@@ -22,6 +23,7 @@ export type MissionRunSummary = S["MissionRunSummary"];
 export type PerspectivePhoto = S["PerspectivePhoto"];
 export type PerspectivePreview = S["PerspectivePreview"];
 export type BatteryThresholdsBody = S["BatteryThresholds"];
+export type PublicSettings = S["PublicSettings"];
 
 export type FetchLike = (input: string, init?: RequestInit) => Promise<Response>;
 
@@ -187,6 +189,11 @@ export class ApiClient {
 
   reboot(): Promise<CommandOutcome> {
     return this.command("/api/vehicle/reboot");
+  }
+
+  /** PUT /api/settings: the camera's mount (refused with 409 while a mission runs). */
+  setCameraMount(mount: Mount): Promise<PublicSettings> {
+    return this.request("PUT", "/api/settings", { camera_mount_deg: mount });
   }
 
   missionDefaults(): Promise<MissionDefaults> {

@@ -4,6 +4,8 @@
 // its mount turns it (roll, pitch, yaw in degrees, as the vehicle's: the station's
 // camera_mount_deg).
 
+import { asMount } from "./mount";
+
 export type Vec3 = [number, number, number];
 
 function rotNedBody(roll: number, pitch: number, yaw: number): number[][] {
@@ -54,6 +56,5 @@ export function cameraFootprint(
 
 /** The camera's mount from the station's settings (straight down when not told). */
 export function mountOf(settings: Record<string, unknown>): Vec3 {
-  const m = settings.camera_mount_deg;
-  return Array.isArray(m) && m.length === 3 && m.every((v) => Number.isFinite(v)) ? [Number(m[0]), Number(m[1]), Number(m[2])] : [0, 0, 0];
+  return asMount(settings.camera_mount_deg) ?? [0, 0, 0];
 }

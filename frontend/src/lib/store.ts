@@ -140,6 +140,12 @@ export class Store {
     return this.heartbeatAge + Math.max(0, this.now() - this.heartbeatAgeAt) / 1000;
   }
 
+  /** Settings changed (a "settings" event's changes, or PUT /api/settings's answer). */
+  mergeSettings(changes: Record<string, unknown>): void {
+    this.settings = { ...this.settings, ...changes };
+    this.emit("settings");
+  }
+
   /** A local event (e.g. a command's outcome) shown in the same log as the server's. */
   addEvent(kind: string, text: string, extra: Record<string, unknown> = {}): void {
     this.events.push({ type: "event", kind, text, t: this.now() / 1000, local: true, ...extra });
@@ -184,6 +190,8 @@ export class Store {
         break;
       case "event":
         this.events.push(msg);
+        // every open page follows a change of settings, whoever made it
+        if (msg.kind === "settings" && isRecord(msg.changes)) this.mergeSettings(msg.changes);
         this.emit("event");
         break;
       case "pong":
@@ -251,6 +259,10 @@ export class Store {
       }
     }
   }
+}
+
+function isRecord(value: unknown): value is Record<string, unknown> {
+  return typeof value === "object" && value !== null && !Array.isArray(value);
 }
 
 function sameReference(a: ReferenceSummary | null, b: ReferenceSummary | null): boolean {

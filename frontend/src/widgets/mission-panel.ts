@@ -2,12 +2,14 @@
 // over the pad; land on it by ArduCopter's precision landing or GCS guidance), whether
 // the vehicle's precision landing is set up (and a one-step set-up), the running
 // mission live (state, the pad in the image, the age of the last target against
-// ArduPilot's limits), and the runs, each openable to its whole record.
+// ArduPilot's limits), the camera's mount (camera-mount.ts), and the runs, each
+// openable to its whole record.
 
 import type { MissionField, MissionRun, MissionRunSummary } from "../lib/api";
 import { fmt, fmtDate } from "../lib/format";
 import { sentence } from "../lib/messages";
 import { readTelemetry } from "../lib/telemetry";
+import { mountCameraMountBox } from "./camera-mount";
 import { confirmDialog } from "./confirm-dialog";
 import { type Ctx, COLORS, fields, fitCanvas, h, panel, rafThrottle, setText } from "./dom";
 import { extnavLine, setupExtnav } from "./extnav";
@@ -134,6 +136,9 @@ export function mountMissionPanel(root: HTMLElement, ctx: Ctx): void {
     ),
   );
   const runDetail = h("div", { class: "run-detail", "data-testid": "run-detail", hidden: true });
+  // under the live mission, so the mission buttons stay on the first screen
+  const cameraMount = h("div", {});
+  mountCameraMountBox(cameraMount, ctx);
   const section = panel(
     "Landing",
     "mission",
@@ -144,6 +149,7 @@ export function mountMissionPanel(root: HTMLElement, ctx: Ctx): void {
     state,
     message,
     h("div", { class: "mission-body" }, h("div", { class: "mission-view" }, canvas, ageBar), right),
+    cameraMount,
     h("h3", { class: "sub-title" }, "Runs (click one for its record)"),
     history,
     runDetail,

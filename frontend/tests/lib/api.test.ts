@@ -109,6 +109,14 @@ describe("ApiClient", () => {
     ]);
   });
 
+  it("puts the camera's mount with the token and reads the settings back", async () => {
+    handler = (_req, _b, res) => json(res, 200, { record_frames: true, camera_mount_deg: [0.1, 8, 0] });
+    const settings = await new ApiClient({ baseUrl: base, token: () => "t0ken-123" }).setCameraMount([0.1, 8, 0]);
+    expect(settings.camera_mount_deg).toEqual([0.1, 8, 0]);
+    expect(seen[0]).toMatchObject({ method: "PUT", url: "/api/settings", auth: "Bearer t0ken-123", type: "application/json" });
+    expect(JSON.parse(seen[0].body)).toEqual({ camera_mount_deg: [0.1, 8, 0] });
+  });
+
   it("refuses a bad take-off altitude without calling the server", async () => {
     const api = new ApiClient({ baseUrl: base });
     for (const alt of [0, -1, Number.NaN, Number.POSITIVE_INFINITY]) {

@@ -84,6 +84,22 @@ describe("Store", () => {
     expect(store.telemetryAt).toBe(6000);
   });
 
+  it("merges a settings event's changes into the settings and tells every page", () => {
+    const store = new Store();
+    store.apply(wire({ type: "hello", status: STATUS, telemetry: {}, reference: null, settings: { record_frames: true, camera_mount_deg: [0, 0, 0] } }));
+    let heard = 0;
+    store.subscribe("settings", () => (heard += 1));
+    store.apply(wire({ type: "event", kind: "settings", text: "settings changed", t: 1, changes: { camera_mount_deg: [0.1, 8, 0] } }));
+    expect(store.settings).toEqual({ record_frames: true, camera_mount_deg: [0.1, 8, 0] });
+    expect(heard).toBe(1);
+    expect(store.events.last()?.kind).toBe("settings");
+    // another kind of event, or one without changes, leaves the settings alone
+    store.apply(wire({ type: "event", kind: "vision", text: "x", t: 2, changes: { record_frames: false } }));
+    store.apply(wire({ type: "event", kind: "settings", text: "settings changed", t: 3 }));
+    expect(store.settings).toEqual({ record_frames: true, camera_mount_deg: [0.1, 8, 0] });
+    expect(heard).toBe(1);
+  });
+
   it("follows the active reference through status messages", () => {
     const store = new Store();
     let refs = 0;

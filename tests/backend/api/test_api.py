@@ -8,6 +8,7 @@ import pytest
 from pymavlink import mavutil
 from starlette.websockets import WebSocketDisconnect
 
+from backend.frames import DOWN_MOUNT, mount_rotation
 from pipeline import Reference
 from pipeline.render import make_pad_image
 from tests.backend.api.support import AUTH, TOKEN, in_process, make_settings, wait_for
@@ -202,10 +203,17 @@ def test_unknown_ids_and_bad_paths(client, method, path, status):
         ({"jpeg_quality": 3}, ["jpeg_quality", "greater"]),
         ({"record_frames": "yes"}, ["record_frames", "boolean"]),
         ({"colour": "red"}, ["colour", "not permitted"]),
+        ({"camera_mount_deg": [0, 60, 0]}, ["camera_mount_deg", "within 45 degrees"]),
+        ({"camera_mount_deg": [0, 0, 200]}, ["camera_mount_deg", "-180..180"]),
+        ({"camera_mount_deg": [0, 8]}, ["camera_mount_deg"]),
+        ({"camera_mount_deg": "0,8,0"}, ["camera_mount_deg"]),
+        ({"camera_mount_deg": [0, "ahead", 0]}, ["camera_mount_deg"]),
     ],
 )
 def test_bad_settings_are_refused(client, body, words):
+    before = client.get("/api/settings").json()
     assert_sentence(client.put("/api/settings", json=body, headers=AUTH), 422, *words)
+    assert client.get("/api/settings").json() == before  # (nothing changed)
 
 
 def test_settings_change_and_show(client):
@@ -215,6 +223,51 @@ def test_settings_change_and_show(client):
     r = client.put("/api/settings", json={"jpeg_quality": 60}, headers=AUTH)
     assert r.status_code == 200 and r.json()["jpeg_quality"] == 60
     assert client.get("/api/settings").json()["jpeg_quality"] == 60
+
+
+def test_the_camera_mount_is_set_while_running_and_every_viewer_told(client):
+    station = client.app.state.station
+    with client.websocket_connect("/ws") as ws:
+        assert ws.receive_json()["settings"]["camera_mount_deg"] == [0.0, 0.0, 0.0]
+        r = client.put("/api/settings", json={"camera_mount_deg": [-2, 8.5, 90]}, headers=AUTH)
+        assert r.status_code == 200, r.text
+        assert r.json()["camera_mount_deg"] == [-2.0, 8.5, 90.0]
+        told = _next_event(ws, "settings")
+    try:
+        assert told["changes"] == {"camera_mount_deg": [-2.0, 8.5, 90.0]}
+        assert "roll, pitch, yaw -2, 8.5, 90 degrees" in told["text"]
+        assert client.get("/api/settings").json()["camera_mount_deg"] == [-2.0, 8.5, 90.0]
+        # What the hints and the next mission take the camera's turn from.
+        assert np.allclose(station.runtime.mount_rotation, mount_rotation(-2.0, 8.5, 90.0))
+        assert np.allclose(
+            station.vehicle.land_config().mount.rotation, mount_rotation(-2, 8.5, 90)
+        )
+        bad = client.put("/api/settings", json={"camera_mount_deg": [0, 46, 0]}, headers=AUTH)
+        assert bad.status_code == 422
+        assert client.get("/api/settings").json()["camera_mount_deg"] == [-2.0, 8.5, 90.0]
+    finally:
+        client.put("/api/settings", json={"camera_mount_deg": [0, 0, 0]}, headers=AUTH)
+    assert np.allclose(station.vehicle.land_config().mount.rotation, DOWN_MOUNT)
+
+
+def test_a_mount_set_while_running_is_kept_unless_one_is_given_at_start(tmp_path):
+    settings = make_settings(tmp_path)
+    with in_process(settings) as first:
+        r = first.put("/api/settings", json={"camera_mount_deg": [0, 7, 0]}, headers=AUTH)
+        assert r.status_code == 200
+    with in_process(settings) as second:
+        assert second.get("/api/settings").json()["camera_mount_deg"] == [0.0, 7.0, 0.0]
+        assert np.allclose(second.app.state.station.runtime.mount_rotation, mount_rotation(0, 7, 0))
+    with in_process(make_settings(tmp_path, camera_mount=(1.0, 2.0, 3.0))) as third:
+        assert third.get("/api/settings").json()["camera_mount_deg"] == [1.0, 2.0, 3.0]
+
+
+def _next_event(ws, kind: str) -> dict:
+    for _ in range(200):
+        msg = ws.receive_json()
+        if msg["type"] == "event" and msg["kind"] == kind:
+            return msg
+    raise AssertionError(f"no {kind} event")
 
 
 def test_viewing_can_require_the_token(client):
