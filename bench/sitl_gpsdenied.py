@@ -14,7 +14,9 @@ The boots run at ``--boot-speedup`` (readiness is the vehicle's business); the f
 ``--speedup`` (<= 1.5 keeps the camera's rate in vehicle time; notes/sitl-findings.md).
 
 ``python -m bench.sitl_gpsdenied --runs 10``; ``--pad-lost`` hides the pad at 2.5 m
-(the pad-lost-without-GPS behaviour instead of a landing on it).
+(the pad-lost-without-GPS behaviour instead of a landing on it); ``--camera-mount`` the
+camera's mount the station is told, ``--sim-camera-mount`` where the camera truly sits
+when not there (what the station's mount check then says is reported).
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ from backend.missions import LandConfig, Mount, TouchdownTruth, VisionSample
 from backend.missions.extnav import ExtNavLandMission
 from backend.missions.geometry import heading_error_deg
 from backend.services.events import EventLog
+from backend.services.mount_check import MountCheck
 from backend.services.params import ParamService
 from pipeline import Reference, process_frame
 from pipeline.render import make_pad_image
@@ -120,12 +123,20 @@ def fly_once(
     pad_lost: bool = False,
     snr_db: float = 25.0,
     mount_deg: Angles = (0.0, 0.0, 0.0),
+    true_mount_deg: Angles | None = None,
 ) -> dict[str, Any]:
     """One fresh SITL: set up, take off on GPS, land with the extnav mission, GPS off over
     the pad; returns the run's figures (``error`` when a set-up step failed).
     ``mount_deg``: the camera's mount, as ``--camera-mount`` takes it (the station is
-    told it, as the mission)."""
-    out: dict[str, Any] = {"seed": seed, "pad_lost": pad_lost, "camera_mount_deg": mount_deg}
+    told it, as the mission); ``true_mount_deg``: where the camera truly sits, when not
+    there."""
+    true_mount = mount_deg if true_mount_deg is None else true_mount_deg
+    out: dict[str, Any] = {
+        "seed": seed,
+        "pad_lost": pad_lost,
+        "camera_mount_deg": mount_deg,
+        "true_camera_mount_deg": true_mount,
+    }
     wall0 = time.monotonic()
     with Sitl(speedup=boot_speedup) as sitl:
         link = VehicleLink(sitl.url)
@@ -133,7 +144,17 @@ def fly_once(
         link.start()
         obs.start()
         try:
-            out.update(_fly(link, obs, seed, boot_speedup, speedup, pad_lost, snr_db, mount_deg))
+            out.update(
+                _fly(
+                    link,
+                    obs,
+                    seed,
+                    (boot_speedup, speedup),
+                    pad_lost,
+                    snr_db,
+                    (mount_deg, true_mount),
+                )
+            )
         except (RunError, SitlError) as exc:
             out["error"] = str(exc)
         finally:
@@ -147,12 +168,13 @@ def _fly(
     link: VehicleLink,
     obs: SitlObserver,
     seed: int,
-    boot_speedup: float,
-    speedup: float,
+    speedups: tuple[float, float],
     pad_lost: bool,
     snr_db: float,
-    mount_deg: Angles,
+    mounts: tuple[Angles, Angles],
 ) -> dict[str, Any]:
+    boot_speedup, speedup = speedups
+    mount_deg, true_mount_deg = mounts  # (told; where the camera truly sits)
     out: dict[str, Any] = {}
     if not _wait_link(link, True, 30):
         raise RunError("the link did not come up")
@@ -211,7 +233,7 @@ def _fly(
             return None
         return TouchdownTruth(t.position_ned[0], t.position_ned[1], math.degrees(t.yaw))
 
-    cam_cfg = _camera_config(seed, snr_db, ground_d, mount_deg)
+    cam_cfg = _camera_config(seed, snr_db, ground_d, true_mount_deg)
     renderer = PadRenderer(cam_cfg)
     blank = PadRenderer(replace(cam_cfg, pad_north_m=cam_cfg.pad_north_m + 1e4))
     camera = cam_cfg.camera
@@ -223,7 +245,11 @@ def _fly(
     hidden_at: tuple[float, float, float] | None = None
     next_frame = boot
     frame_times: list[float] = []
-    mount = cam_cfg.mount_rotation
+    mount = mount_rotation(*mount_deg)
+    told: list[dict[str, Any]] = []  # what the station's mount check says
+    mount_check = MountCheck(
+        lambda _kind, text, data: told.append({"text": text, **(data or {})}), mount_deg
+    )
     limit = time.monotonic() + _wall(config.timeout_s, speedup)
     while not mission.done:
         if time.monotonic() > limit:
@@ -248,6 +274,7 @@ def _fly(
         )
         result = process_frame(image, reference, camera, **hints)
         frame_times.append(time.perf_counter() - w0)
+        mount_check.observe(result)
         sample = VisionSample(result, camera, t_capture, max(1, round(t_capture * 1e6)))
         mission.step(max(mission.now, obs.boot_s or 0.0), sample)
         if gps_off_at is None and mission.state in ("settle", "descend"):
@@ -275,6 +302,7 @@ def _fly(
             "gps_fix_type_at_end": None if gps is None else gps.fix_type,
             "frame_s_median": round(statistics.median(frame_times), 4) if frame_times else None,
             "texts": [t.text for t in obs.texts(mark)],
+            "mount_check": told,
         }
     )
     if hidden_at is not None and td is not None:
@@ -340,6 +368,13 @@ def main(argv: list[str] | None = None) -> int:
         metavar="ROLL,PITCH,YAW",
         help="the camera's mount in degrees, as the station's --camera-mount",
     )
+    parser.add_argument(
+        "--sim-camera-mount",
+        type=_angles,
+        default=None,
+        metavar="ROLL,PITCH,YAW",
+        help="where the camera truly sits, when not on --camera-mount",
+    )
     args = parser.parse_args(argv)
     if args.runs < 1:
         parser.error("--runs must be >= 1")
@@ -356,6 +391,7 @@ def main(argv: list[str] | None = None) -> int:
             speedup=args.speedup,
             pad_lost=args.pad_lost,
             mount_deg=args.camera_mount,
+            true_mount_deg=args.sim_camera_mount,
         )
         runs.append(run)
         print(

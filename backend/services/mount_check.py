@@ -82,8 +82,9 @@ class MountCheck:
                     f"the camera is likely not on the mount set (--camera-mount "
                     f"{self._mount}), or the pad does not lie level. Poses are held near "
                     "that level, and may be off by several percent of the height: set the "
-                    "camera's mount. By the pad's pixels, it is about --camera-mount "
-                    f"{_flag(suggested)} (its yaw is not seen: the one set is kept)."
+                    "camera's mount (the Landing panel's, between missions). By the pad's "
+                    f"pixels, it is about --camera-mount {_flag(suggested)} (its yaw is not "
+                    "seen: the one set is kept)."
                 )
             elif self._warned and lean < CLEAR_DEG:
                 self._warned = False

@@ -43,6 +43,20 @@ def test_a_camera_pitched_ahead_told_its_mount_lands_on_vision():
     assert "on vision navigation (ExternalNav)" in run["message"]
     assert run["touchdown_error_m"] < 0.20
     assert run["vision_positions_sent"] > 50
+    assert run["mount_check"] == []  # (the pad's pixels lie level with what it was told)
+
+
+def test_a_camera_pitched_ahead_taken_for_a_downward_one_is_told_in_flight():
+    # The camera looks 6 degrees ahead; the station is told it looks straight down. The
+    # attitude holds its poses near the wrong level (a few percent of the height off),
+    # and the mount check tells the operator which mount the pixels put the camera on.
+    run = fly_once(seed=3, true_mount_deg=(0.0, 6.0, 0.0))
+    assert "error" not in run, run
+    assert run["outcome"] == "landed", run
+    assert run["touchdown_error_m"] < 0.20
+    (told,) = run["mount_check"]
+    roll, pitch, yaw = told["suggested_mount_deg"]
+    assert abs(roll) < 1.5 and abs(pitch - 6.0) < 1.5 and yaw == 0.0, told
 
 
 def test_pad_lost_without_gps_lands_in_place_and_says_so():

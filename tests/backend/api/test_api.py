@@ -225,6 +225,15 @@ def test_settings_change_and_show(client):
     assert client.get("/api/settings").json()["jpeg_quality"] == 60
 
 
+@pytest.mark.parametrize("raw", ["[NaN, 0, 0]", "[0, Infinity, 0]", "[0, 0, -1e400]"])
+def test_a_mount_of_no_finite_angles_is_refused(client, raw):
+    # (JSON as Python reads it takes these words; no mount is made of them)
+    headers = {**AUTH, "Content-Type": "application/json"}
+    r = client.put("/api/settings", content=f'{{"camera_mount_deg": {raw}}}', headers=headers)
+    assert_sentence(r, 422, "camera_mount_deg", "finite")
+    assert client.get("/api/settings").json()["camera_mount_deg"] == [0.0, 0.0, 0.0]
+
+
 def test_the_camera_mount_is_set_while_running_and_every_viewer_told(client):
     station = client.app.state.station
     with client.websocket_connect("/ws") as ws:
