@@ -31,7 +31,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from backend.camera import FrameSource, open_source
+from backend.camera import Frame, FrameSource, open_source
 from backend.datadir import prepare_data_dir
 from backend.encoder import EncodedFrame, FrameEncoder
 from backend.framebus import FrameBus
@@ -214,15 +214,14 @@ def build_station(settings: Settings) -> Station:
         source = _open_camera(settings, camera, mount_rotation(*true_mount), link, stand_in)
         results: FrameBus[Processed] = FrameBus("results")
 
-        def hints() -> dict[str, Any]:
+        def hints(frame: Frame) -> dict[str, Any]:
             # The pad lies level and faces a known heading: the vehicle's attitude
-            # tells the pipeline which of the pad's twin and tilted poses is right.
-            att = link.telemetry.attitude
+            # tells the pipeline which of the pad's twin and tilted poses is right. The
+            # attitude when the frame was taken: the vehicle has tilted on since.
+            att = link.attitude_at(frame.t_capture)
             if att is None:
                 return {}
-            return vision_hints(
-                settings.pad_heading_deg, att.roll, att.pitch, att.yaw, runtime.mount_rotation
-            )
+            return vision_hints(settings.pad_heading_deg, *att, runtime.mount_rotation)
 
         mount_check = MountCheck(events.emit, runtime.camera_mount)
 

@@ -77,9 +77,10 @@ class VisionWorker:
     camera : intrinsics at some size; scaled to each frame's size.
     process : ``process(image_bgr, reference, camera, *, prior, **hints) -> FrameResult``
         (``pipeline.process_frame``); ``prior`` is the last detection, when recent.
-    hints : returns the keyword hints for this frame (``yaw_hint``, the camera's
-        yaw in the pad frame; ``gravity_hint``, down in the camera frame), from
-        what the vehicle reports; empty when it reports nothing yet.
+    hints : ``hints(frame)``: the keyword hints for this frame (``yaw_hint``, the
+        camera's yaw in the pad frame; ``gravity_hint``, down in the camera frame),
+        from what the vehicle reports of the frame's moment; empty when it reports
+        nothing then.
     """
 
     def __init__(
@@ -90,7 +91,7 @@ class VisionWorker:
         reference: Callable[[], Reference | None],
         camera: Camera,
         process: Callable[..., FrameResult],
-        hints: Callable[[], Mapping[str, Any]] | None = None,
+        hints: Callable[[Frame], Mapping[str, Any]] | None = None,
         window: int = 30,
         join_timeout: float = 5.0,
     ) -> None:
@@ -198,7 +199,7 @@ class VisionWorker:
     def _handle(self, frame: Frame, reference: Reference) -> None:
         try:
             camera = self._camera_for(frame.image)
-            hints = self._hints() if self._hints is not None else {}
+            hints = self._hints(frame) if self._hints is not None else {}
             result = self._process(
                 frame.image, reference, camera, prior=self._prior(frame, reference), **hints
             )

@@ -35,6 +35,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from backend.link import commands as cmd
 from backend.link import streams
+from backend.link.attitudes import Angles, AttitudeHistory
 from backend.link.commanding import LinkCommands
 from backend.link.commands import AckTracker
 from backend.link.connection import TlogWriter, Transport, parse_url
@@ -49,6 +50,11 @@ from backend.link.telemetry import (
 )
 
 log = logging.getLogger(__name__)
+
+ATTITUDE_HISTORY_S = 2.0  # the attitudes kept, for frames taken this long ago at most
+# A frame's moment this far from every attitude received has none: ATTITUDE comes at
+# 10-50 Hz, and a vehicle silent for longer may be anywhere by then.
+ATTITUDE_GAP_S = 0.5
 
 
 class VehicleLink(LinkCommands, LinkReceiver, LinkHousekeeping):
@@ -181,7 +187,10 @@ class VehicleLink(LinkCommands, LinkReceiver, LinkHousekeeping):
             "COMMAND_ACK": self._on_command_ack,
             "STATUSTEXT": self._on_statustext,
             "PARAM_VALUE": self._on_param_value,
+            "ATTITUDE": self._note_attitude,
         }
+        # (by this process's clock, as frames are stamped: see `attitude_at`)
+        self._attitudes = AttitudeHistory(ATTITUDE_HISTORY_S)
 
     # ------------------------------------------------------------------ lifecycle
     def start(self) -> None:
@@ -278,6 +287,18 @@ class VehicleLink(LinkCommands, LinkReceiver, LinkHousekeeping):
         if not isinstance(msg_type, str):
             raise ValueError(f"msg_type must be a message name string, got {msg_type!r}")
         return self._latest.get(msg_type.upper())
+
+    def attitude_at(self, t_monotonic: float) -> Angles | None:
+        """The vehicle's roll, pitch and yaw (rad) at ``t_monotonic`` (a frame's capture
+        time, ``time.monotonic()``): interpolated between the ATTITUDEs received around
+        it; None when none was received within ``ATTITUDE_GAP_S`` of it (or over the
+        last ``ATTITUDE_HISTORY_S``)."""
+        return self._attitudes.at(t_monotonic, max_gap=ATTITUDE_GAP_S)
+
+    def _note_attitude(self, msg: Any) -> None:
+        # (stamped as the snapshot's: when the reader took it off the wire)
+        rx = self._telemetry.attitude_rx_monotonic
+        self._attitudes.add(time.monotonic() if rx is None else rx, (msg.roll, msg.pitch, msg.yaw))
 
     def subscribe(self, callback: Callable[[LinkEvent], None]) -> Callable[[], None]:
         """Call ``callback(event)`` (on the event thread) for every :class:`LinkEvent`.

@@ -9,7 +9,6 @@ The link is anything with :class:`~backend.link.VehicleLink`'s methods.
 
 from __future__ import annotations
 
-import bisect
 import math
 import threading
 from collections.abc import Callable
@@ -19,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from backend.link import LinkState, Telemetry
+from backend.link.attitudes import AttitudeHistory
 from backend.missions.config import LandConfig
 from backend.missions.geometry import PadFix, heading_error_deg, pad_fix, rot_ned_body, wrap90
 from backend.missions.record import RunRecord, Touchdown
@@ -74,55 +74,6 @@ def vehicle_time_usec(tel: Telemetry, t_capture: float) -> int | None:
     return max(1, round(usec))
 
 
-class AttitudeHistory:
-    """The vehicle's recent attitudes by its clock, to rotate a fix by the attitude at
-    the frame's capture: a frame is processed while the vehicle tilts on, and the
-    latest attitude would turn the pad's offset by the difference (a tenth of a second
-    of a busy ground station at 50 deg/s puts a pad 4 m below 0.35 m off)."""
-
-    def __init__(self, seconds: float = 2.0) -> None:
-        self._span_ms = seconds * 1000.0
-        self._times: list[int] = []
-        self._angles: list[tuple[float, float, float]] = []
-
-    def add(self, tel: Telemetry) -> None:
-        """Note the telemetry's attitude when it is new."""
-        a, ms = tel.attitude, tel.attitude_time_boot_ms
-        if a is None or ms is None:
-            return
-        if self._times and ms <= self._times[-1]:
-            if ms < self._times[-1] - self._span_ms:  # the vehicle rebooted
-                self._times.clear()
-                self._angles.clear()
-            else:
-                return
-        self._times.append(ms)
-        self._angles.append((a.roll, a.pitch, a.yaw))
-        while self._times[0] < ms - self._span_ms:
-            del self._times[0], self._angles[0]
-
-    def at(self, time_boot_ms: float) -> tuple[float, float, float] | None:
-        """Roll, pitch, yaw (rad) at ``time_boot_ms``: interpolated between the two
-        attitudes around it, the nearest one outside them; None before any."""
-        if not self._times:
-            return None
-        i = bisect.bisect_left(self._times, time_boot_ms)
-        if i == 0:
-            return self._angles[0]
-        if i == len(self._times):
-            return self._angles[-1]
-        t0, t1 = self._times[i - 1], self._times[i]
-        w = (time_boot_ms - t0) / (t1 - t0)
-        a0, a1 = self._angles[i - 1], self._angles[i]
-        # Yaw wraps at +-pi: interpolate along the short way round.
-        dyaw = math.remainder(a1[2] - a0[2], 2 * math.pi)
-        return (
-            a0[0] + w * (a1[0] - a0[0]),
-            a0[1] + w * (a1[1] - a0[1]),
-            math.remainder(a0[2] + w * dyaw, 2 * math.pi),
-        )
-
-
 class Mission:
     """Common machinery: states, vision fixes, failsafe bookkeeping, the run record.
 
@@ -168,6 +119,7 @@ class Mission:
         self.last_sample: VisionSample | None = None
         # The pad centre in local NED (the vehicle's own position frame), from the last fix.
         self.pad_est: tuple[float, float, float] | None = None
+        # (the vehicle's attitudes by its clock: a fix is turned by its frame's)
         self._attitudes = AttitudeHistory()
         self._touchdown_truth = touchdown_truth
         self._on_change = on_change
@@ -216,7 +168,9 @@ class Mission:
             raise ValueError(f"now must be finite and not before {self.now}, got {now!r}")
         self.now = now
         tel = self.link.telemetry
-        self._attitudes.add(tel)
+        if tel.attitude is not None and tel.attitude_time_boot_ms is not None:
+            a = tel.attitude
+            self._attitudes.add(tel.attitude_time_boot_ms / 1000.0, (a.roll, a.pitch, a.yaw))
         self._observe(tel)
         if sample is not None:
             self._take(sample, tel)
@@ -339,7 +293,7 @@ class Mission:
             fix = pad_fix(
                 res.pose,
                 sample.camera,
-                self._attitudes.at(usec / 1000.0) or (a.roll, a.pitch, a.yaw),
+                self._attitudes.at(usec / 1e6) or (a.roll, a.pitch, a.yaw),
                 t_capture=sample.t_capture,
                 time_usec=usec,
                 mount_rotation=mount.rotation,

@@ -89,10 +89,16 @@ def results(n):
 
 def test_processes_frames_and_finds_the_pad(pad_frame):
     reference, frame = pad_frame
-    worker, got = run_worker(
-        RenderedSource(frame, 10), reference, results(3), hints=lambda: {"yaw_hint": 20.0}
-    )
+    asked = {}
+
+    def hints(of) -> dict:
+        # (the vehicle's attitude is looked up for the frame's own moment)
+        asked[of.seq] = of.t_capture
+        return {"yaw_hint": 20.0}
+
+    worker, got = run_worker(RenderedSource(frame, 10), reference, results(3), hints=hints)
     assert len(got) >= 3
+    assert all(asked[p.frame.seq] == p.frame.t_capture for p in got)
     assert all(p.result.detected for p in got)
     assert got[-1].result.pose is not None
     assert np.allclose(got[-1].result.pose.position_m, [0.05, -0.1, 2.5], atol=0.1)
@@ -153,7 +159,7 @@ def test_frames_of_another_size_use_the_scaled_camera(pad_frame):
 
     small = cv2.resize(frame, (320, 240), interpolation=cv2.INTER_AREA)
     _, got = run_worker(
-        RenderedSource(small, 10), reference, results(1), hints=lambda: {"yaw_hint": 20.0}
+        RenderedSource(small, 10), reference, results(1), hints=lambda _frame: {"yaw_hint": 20.0}
     )
     assert got and got[-1].camera.width == 320 and got[-1].result.detected
 

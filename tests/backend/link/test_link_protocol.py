@@ -714,3 +714,28 @@ def test_set_yaw_sends_condition_yaw_absolute_shortest_way(peer: Any, make_link)
     assert (sent.param1, sent.param2, sent.param3, sent.param4) == (330.0, 10.0, 0.0, 0.0)
     assert link.set_yaw(10.0, rate_dps=-1).result_name == "INVALID_ARGUMENT"
     assert link.set_yaw(math.nan).result_name == "INVALID_ARGUMENT"
+
+
+def test_the_attitude_at_a_frames_moment(peer: Any, make_link) -> None:
+    """What the vision is told of the camera's tilt is the attitude when its frame was
+    taken: the link keeps the attitudes it received by their arrival (this process's
+    clock, as frames are stamped), and has none for a moment long after the last."""
+    link = make_link(f"tcp:127.0.0.1:{peer.port}")
+    assert _up(link)
+    assert link.attitude_at(time.monotonic()) is None
+    arrived = []
+    for ms, roll in ((1000, 0.1), (1100, 0.3)):
+        peer.send(mavlink2.MAVLink_attitude_message(ms, roll, -0.05, 1.0, 0.0, 0.0, 0.0))
+        assert link.wait_until(lambda t, ms=ms: t.attitude_time_boot_ms == ms, 5.0)
+        arrived.append(link.telemetry.attitude_rx_monotonic)
+    t1, t2 = arrived
+    assert link.attitude_at(t1) == pytest.approx((0.1, -0.05, 1.0))
+    assert link.attitude_at((t1 + t2) / 2) == pytest.approx((0.2, -0.05, 1.0))
+    assert link.attitude_at(t2 + 0.4) == pytest.approx((0.3, -0.05, 1.0))
+    # An attitude no vehicle can have is dropped before it is kept.
+    peer.send(mavlink2.MAVLink_attitude_message(1200, 1e9, 0.0, 1.0, 0.0, 0.0, 0.0))
+    assert link.wait_until(lambda t: t.implausible >= 1, 5.0)
+    assert link.attitude_at(t2 + 0.4) == pytest.approx((0.3, -0.05, 1.0))
+    # Half a second and more away from every attitude received: not known.
+    assert link.attitude_at(t2 + 0.6) is None
+    assert link.attitude_at(t1 - 0.6) is None
