@@ -3,7 +3,7 @@
 - no mode: the default pad, 1-6 m, today's degradation mix (figures comparable
   with every earlier run);
 - ``--design NAME|all``: per pad design (`pipeline.render.DESIGNS`), with a summary;
-- ``--sweep altitude|snr|tilt``: detection, pose error and time per point for
+- ``--sweep altitude|snr|tilt|yaw``: detection, pose error and time per point for
   Visland, ArUco and AprilTag 3 on the same poses, and range90 (`pipeline.bench.sweep`);
 - ``--report DIR``: the dissertation's experiments reproduced (`pipeline.bench.report`);
 - ``--vector``: the pose on frames drawn another way, the pad as vector polygons

@@ -10,7 +10,7 @@ from pipeline.bench import accuracy
 from pipeline.bench.frames import DEGRADE_LEVELS
 from pipeline.preprocess import DEFAULT_METHOD, METHODS
 
-SWEEPS = ("altitude", "snr", "tilt")
+SWEEPS = ("altitude", "snr", "tilt", "yaw")
 RESOLUTIONS = ("640x480", "1280x720", "1920x1080")
 SWEPT_RESOLUTIONS = RESOLUTIONS[:2]  # the altitude sweep's without --resolution
 

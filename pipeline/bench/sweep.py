@@ -1,4 +1,4 @@
-"""Sweeps: ``python -m pipeline.bench --sweep altitude|snr|tilt [--resolution WxH] [--plot DIR]``.
+"""Sweeps: ``python -m pipeline.bench --sweep KIND [--resolution WxH] [--plot DIR]``.
 
 At each point of the sweep, ``frames`` views of the pad (a random yaw, the pad
 anywhere in the image, the ``--degrade`` mix with the swept quantity fixed) are
@@ -14,7 +14,13 @@ their native resolution (60 degree HFOV).
   ``range90_m`` per detector: the highest altitude up to which every point has
   >= 90 % detection;
 - ``snr``: 5-40 dB at the bench's altitudes (1-6 m for the 0.55 m pad);
-- ``tilt``: 0-45 degrees off nadir at the bench's altitudes.
+- ``tilt``: 0-45 degrees off nadir at the bench's altitudes;
+- ``yaw``: hovering (tilt up to ``HOVER_TILT_DEG``) at the bench's altitudes, the
+  camera turned 0-45 degrees about its axis from the pad's: at 0 the H's sides lie
+  along the pixel rows and columns, as a vehicle facing the pad's heading sees them
+  (the landing turns it so), and each side's points share one phase to the pixel
+  grid, so an edge locator's error that depends on the phase does not average out
+  along it.
 """
 
 from __future__ import annotations
@@ -39,10 +45,13 @@ from pipeline.render.view import render_view
 DETECTORS = ("visland", "aruco", "apriltag")
 SNR_POINTS_DB = (5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0)
 TILT_POINTS_DEG = (0.0, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0, 45.0)
+YAW_POINTS_DEG = (0.0, 1.0, 2.0, 5.0, 10.0, 20.0, 30.0, 45.0)
+HOVER_TILT_DEG = 3.0  # a hovering multirotor's camera, off nadir
 FAR_SPAN_PX = 12.0  # the altitude sweep ends where the pad spans this many pixels
 RANGE_RATE = 0.9
 _SCENE_POOL = 4  # scene sets shared by all points (a set takes ~1 s to build)
-_X_KEY = {"altitude": "altitude_m", "snr": "snr_db", "tilt": "tilt_deg"}
+_X_KEY = {"altitude": "altitude_m", "snr": "snr_db", "tilt": "tilt_deg", "yaw": "yaw_deg"}
+_POINTS = {"snr": SNR_POINTS_DB, "tilt": TILT_POINTS_DEG, "yaw": YAW_POINTS_DEG}
 
 
 def altitude_points(design: Design, camera: Camera) -> list[float]:
@@ -111,10 +120,7 @@ def run_sweep(
     }
     for width, height in resolutions:
         camera = Camera.from_fov(width, height, 60.0)
-        if kind == "altitude":
-            xs = altitude_points(d, camera)
-        else:
-            xs = list(SNR_POINTS_DB if kind == "snr" else TILT_POINTS_DEG)
+        xs = altitude_points(d, camera) if kind == "altitude" else list(_POINTS[kind])
         points = []
         for p, x in enumerate(xs):
             tallies = {name: Tally() for name in DETECTORS}
@@ -165,6 +171,8 @@ def _fix(kind: str, x: float) -> dict:
         return {"altitude": (x, x)}
     if kind == "snr":
         return {"snr_db": (x, x)}
+    if kind == "yaw":
+        return {"yaw_deg": x, "max_tilt_deg": HOVER_TILT_DEG}
     return {"min_tilt_deg": x, "max_tilt_deg": x}
 
 
@@ -189,7 +197,12 @@ def plot_sweep(result: dict, plot_dir: str) -> list[str]:
     """One PNG per resolution: detection, position error and time against the sweep."""
     kind = result["sweep"]
     key = _X_KEY[kind]
-    xlabel = {"altitude": "altitude (m)", "snr": "SNR (dB)", "tilt": "tilt (deg)"}[kind]
+    xlabel = {
+        "altitude": "altitude (m)",
+        "snr": "SNR (dB)",
+        "tilt": "tilt (deg)",
+        "yaw": "camera yaw from the pad's axes (deg)",
+    }[kind]
     paths = []
     for res_name, res in result["resolutions"].items():
         pts = res["points"]

@@ -144,12 +144,15 @@ def random_view(
     lighting: bool = True,
     realistic: bool = False,
     min_tilt_deg: float = 0.0,
+    yaw_deg: float | None = None,
 ) -> View:
     """A random pose and degradations, as the accuracy benchmark samples them.
 
     Altitude uniform in ``altitude`` (metres), tilt uniform in [min_tilt_deg,
     max_tilt_deg] (a fixed tilt when they are equal) toward
-    a uniform direction, yaw uniform, the pad's centre at a uniform image position
+    a uniform direction, yaw uniform (or ``yaw_deg``: the camera's yaw in the pad
+    frame, 0 with the H's strokes along the image's rows and columns), the pad's
+    centre at a uniform image position
     such that (with ``whole_pad_in_view``) all four board corners are at least
     ``margin_px`` inside the image; SNR uniform in ``snr_db`` (None: no noise), blur
     sigma uniform in [0, max_blur_px], random lighting (``lighting``). ``realistic``
@@ -173,6 +176,7 @@ def random_view(
     if not 0 <= max_tilt < 60:
         raise ValueError(f"max_tilt_deg must be in [0, 60), got {max_tilt}")
     min_tilt = _finite(min_tilt_deg, "min_tilt_deg")
+    fixed_yaw = None if yaw_deg is None else _finite(yaw_deg, "yaw_deg")
     if not 0 <= min_tilt <= max_tilt:
         raise ValueError(f"min_tilt_deg must be in [0, max_tilt_deg], got {min_tilt}")
     snr = None if snr_db is None else _range(snr_db, "snr_db", -math.inf)
@@ -190,7 +194,9 @@ def random_view(
     W, H = camera.width, camera.height
     for _attempt in range(200):
         alt = float(rng.uniform(alt_lo, alt_hi))
-        yaw = float(rng.uniform(-180.0, 180.0))
+        yaw = float(rng.uniform(-180.0, 180.0))  # (drawn all the same: the rest as without)
+        if fixed_yaw is not None:
+            yaw = fixed_yaw
         tilt = float(rng.uniform(min_tilt, max_tilt))
         tdir = float(rng.uniform(0.0, 360.0))
         R = camera_rotation(yaw, tilt_deg=tilt, tilt_dir_deg=tdir)

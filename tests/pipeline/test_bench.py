@@ -14,7 +14,7 @@ from pipeline.bench.__main__ import main
 from pipeline.bench.frames import altitude_for, view_options
 from pipeline.bench.markers import AprilTagDetector, ArucoDetector, marker_texture
 from pipeline.bench.plot import line_panel, nice_ticks
-from pipeline.bench.sweep import altitude_points, range90, run_sweep
+from pipeline.bench.sweep import YAW_POINTS_DEG, altitude_points, range90, run_sweep
 from pipeline.camera import Camera
 from pipeline.preprocess import DEFAULT_METHOD
 from pipeline.render import DESIGNS, make_scene, random_view, render_view
@@ -111,6 +111,16 @@ def test_sweep_cli_at_1920x1080(capsys) -> None:
     assert list(out["resolutions"]) == ["1920x1080"]
     near = out["resolutions"]["1920x1080"]["points"][0]
     assert near["tilt_deg"] == 0.0 and near["visland"]["detection_rate"] == 1.0
+
+
+def test_sweep_cli_yaw(capsys) -> None:
+    """Hovering, the camera turned from the pad's axes: at 0 the H's sides lie along the
+    pixel grid, as a vehicle facing the pad's heading sees them."""
+    assert main(["--sweep", "yaw", "--frames", "1", "--resolution", "640x480"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    points = out["resolutions"]["640x480"]["points"]
+    assert [p["yaw_deg"] for p in points] == list(YAW_POINTS_DEG)
+    assert points[0]["visland"]["detection_rate"] == 1.0
 
 
 def test_cli_rejects_bad_input(capsys) -> None:

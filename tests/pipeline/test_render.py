@@ -518,6 +518,19 @@ def test_random_view_keeps_pad_inside() -> None:
         assert px.min() >= 8 and px[:, 0].max() <= 631 and px[:, 1].max() <= 471
 
 
+def test_a_view_turned_to_a_given_yaw_draws_the_rest_as_without() -> None:
+    for yaw in (0.0, 30.0, -90.0):
+        v = random_view(np.random.default_rng(4), CAM, yaw_deg=yaw, max_tilt_deg=3.0)
+        assert v.yaw_deg == yaw and yaw_of(v.R_pad_cam) == pytest.approx(yaw, abs=1e-9)
+        assert v.tilt_deg <= 3.0
+    free = random_view(np.random.default_rng(5), CAM)
+    turned = random_view(np.random.default_rng(5), CAM, yaw_deg=10.0)
+    assert turned.altitude_m == free.altitude_m and turned.tilt_deg == free.tilt_deg
+    assert turned.snr_db == free.snr_db and turned.blur_sigma_px == free.blur_sigma_px
+    with pytest.raises(ValueError, match="yaw_deg"):
+        random_view(np.random.default_rng(5), CAM, yaw_deg=float("nan"))
+
+
 def test_view_to_dict_is_json() -> None:
     v = random_view(np.random.default_rng(1), CAM)
     d = json.loads(json.dumps(v.to_dict()))
