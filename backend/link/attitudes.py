@@ -51,20 +51,20 @@ class AttitudeHistory:
         """The attitude at ``t``: interpolated between the two around it, else the
         nearest one; None before any, or (with ``max_gap``) when ``t`` lies farther
         than that outside what is known (the vehicle's attitude then is not known)."""
-        with self._lock:
-            times, kept = list(self._times), list(self._angles)
-        if not times or not math.isfinite(t):
+        if not math.isfinite(t):
             return None
-        if max_gap is not None and not times[0] - max_gap <= t <= times[-1] + max_gap:
-            return None
-        i = bisect.bisect_left(times, t)
-        if i == 0:
-            return kept[0]
-        if i == len(times):
-            return kept[-1]
-        t0, t1 = times[i - 1], times[i]
+        with self._lock:  # (the two around it, not copies of all: this runs every frame)
+            times, kept = self._times, self._angles
+            if not times:
+                return None
+            if max_gap is not None and not times[0] - max_gap <= t <= times[-1] + max_gap:
+                return None
+            i = bisect.bisect_left(times, t)
+            if i == 0 or i == len(times):
+                return kept[min(i, len(times) - 1)]
+            t0, t1 = times[i - 1], times[i]
+            a0, a1 = kept[i - 1], kept[i]
         w = (t - t0) / (t1 - t0)
-        a0, a1 = kept[i - 1], kept[i]
         # Yaw wraps at +-pi: interpolated the short way round.
         dyaw = math.remainder(a1[2] - a0[2], 2 * math.pi)
         return (
