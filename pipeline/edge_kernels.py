@@ -21,6 +21,10 @@ MAX_REACH_PX = 8.0  # the farthest a side's edge is looked for
 BORDER_PX = 2.0  # points this near the image's border (3 px on the far side) are not measured
 SUPPORT_PX = 0.75  # an edge this near where a side is put counts as found
 GIVE_UP_STEPS = 3  # (see homography_steps' give_up_below)
+# `edge_offsets`' centroid of the drops around the steepest:
+WEIGHT_FLOOR = 0.2  # of the steepest drop: those above it weigh by their excess
+TAIL_SHARE = 0.1  # of the steepest drop: where the drops around it end
+MAX_TAIL = 6  # samples each side of the steepest at most
 
 
 @compiled
@@ -70,7 +74,7 @@ def in_view(x, y, h, w):
 
 
 @compiled
-def edge_offsets(img, proj, normal, search, min_drop):
+def edge_offsets(img, proj, normal, search, min_drop, centroid=False):
     """Signed distance along each normal from each projected point to the image's
     edge (bright to dark along the normal), sub-pixel, looked for within ``search``
     pixels; and whether one was found.
@@ -80,35 +84,94 @@ def edge_offsets(img, proj, normal, search, min_drop):
     frame's own pixels, less on an enlarged view's), refined by a parabola through
     the drops around it. A drop at the end of the search is not an edge found (it
     may lie further out).
+
+    The parabola locks to the pixel grid: across a side along the rows or columns,
+    linear interpolation's drops come in equal pairs within a pixel, and the vertex
+    lands up to 0.39 px off by the edge's phase alone (at any other angle the phases
+    vary along the side and average out). ``centroid`` places the edge at the
+    centroid of the drops around the steepest instead (`_drops_centroid`): within
+    0.03-0.15 px at every phase, but with a noise of its own that the detection's
+    thresholds were not tuned for; `pipeline.measure` uses it for the pose alone.
     """
     n = proj.shape[0]
     h, w = img.shape
     reach = min(search, MAX_REACH_PX)
     half = math.floor(reach / STEP_PX + 1e-6)
     count = 2 * half + 1
-    first = -half * STEP_PX
+    first = -(half + MAX_TAIL) * STEP_PX  # (of the buffers, which hold the tails too)
     delta = np.zeros(n)
     ok = np.zeros(n, np.bool_)
-    values = np.empty(count)
-    drops = np.empty(count - 1)
+    values = np.empty(count + 2 * MAX_TAIL)
+    drops = np.empty(count + 2 * MAX_TAIL - 1)
+    lo, hi = MAX_TAIL, MAX_TAIL + count - 1  # the searched samples
     for i in range(n):
         px, py = proj[i, 0], proj[i, 1]
         nx, ny = normal[i, 0], normal[i, 1]
-        _across(img, px, py, nx, ny, first, values)
-        best = 0
-        for k in range(count - 1):
+        _across(img, px, py, nx, ny, first + lo * STEP_PX, values[lo : hi + 1])
+        best = lo
+        for k in range(lo, hi):
             drops[k] = values[k] - values[k + 1]
             if drops[k] > drops[best]:
                 best = k
-        found = 0 < best < count - 2 and drops[best] > min_drop and in_view(px, py, h, w)
-        kk = min(max(best, 1), count - 3)
-        g0, g1, g2 = drops[kk - 1], drops[kk], drops[kk + 1]
-        den = g0 - 2.0 * g1 + g2
-        sub = 0.5 * (g0 - g2) / den if abs(den) > 1e-9 else 0.0
-        sub = min(max(sub, -0.5), 0.5)
-        delta[i] = first + (kk + 0.5 + sub) * STEP_PX
+        found = lo < best < hi - 1 and drops[best] > min_drop and in_view(px, py, h, w)
+        if centroid:
+            at = _drops_centroid(img, px, py, nx, ny, first, values, drops, best, lo, hi)
+        else:
+            kk = min(max(best, lo + 1), hi - 2)
+            g0, g1, g2 = drops[kk - 1], drops[kk], drops[kk + 1]
+            den = g0 - 2.0 * g1 + g2
+            sub = 0.5 * (g0 - g2) / den if abs(den) > 1e-9 else 0.0
+            at = kk + min(max(sub, -0.5), 0.5)
+        delta[i] = first + (at + 0.5) * STEP_PX
         ok[i] = found
     return delta, ok
+
+
+@compiled
+def _drops_centroid(img, px, py, nx, ny, first, values, drops, best, lo, hi):
+    """Where (in drops' indices) the centroid of the drops around ``best`` lies: those
+    over ``WEIGHT_FLOOR`` of the steepest weigh by their excess, out to where they
+    fall to ``TAIL_SHARE`` of it and at most ``MAX_TAIL`` samples each side (sampled
+    beyond the search, ``lo``..``hi``, where needed); taken twice, the second time
+    around the first's centroid (a blurred edge's drops lean to one side of the
+    steepest)."""
+    floor = TAIL_SHARE * drops[best]
+    weigh_above = WEIGHT_FLOOR * drops[best]
+    top = len(drops)
+    centre = best
+    at = float(best)
+    for _ in range(2):
+        a = centre
+        while a > 0 and centre - a < MAX_TAIL:
+            if a - 1 < lo:
+                lo -= 1
+                t = first + lo * STEP_PX
+                values[lo] = _bilinear(img, px + t * nx, py + t * ny)
+                drops[lo] = values[lo] - values[lo + 1]
+            if drops[a - 1] <= floor:
+                break
+            a -= 1
+        b = centre
+        while b < top - 1 and b - centre < MAX_TAIL:
+            if b + 2 > hi:
+                hi += 1
+                t = first + hi * STEP_PX
+                values[hi] = _bilinear(img, px + t * nx, py + t * ny)
+                drops[hi - 1] = values[hi - 1] - values[hi]
+            if drops[b + 1] <= floor:
+                break
+            b += 1
+        mass = 0.0
+        moment = 0.0
+        for k in range(a, b + 1):
+            weight = drops[k] - weigh_above
+            if weight > 0.0:
+                mass += weight
+                moment += weight * k
+        if mass > 0.0:
+            at = moment / mass
+        centre = min(max(round(at), lo), hi - 1)
+    return at
 
 
 @compiled
@@ -234,6 +297,7 @@ def homography_steps(
     damping,
     min_drop,
     give_up_below,
+    centroid,
 ):
     """The Gauss-Newton steps of ``pipeline.homography_fit.fit_homography`` on the
     normalised homography ``h0`` (8 entries, pad coordinates through ``Tm``, pixels
@@ -244,7 +308,7 @@ def homography_steps(
     the sides' edges, (h, p, rms of the inliers, per side the share of its seen
     samples on an edge (nan: none seen)), and whether a step was taken at all. A fit
     that has found less than ``give_up_below`` of its sides after ``GIVE_UP_STEPS``
-    steps stops there."""
+    steps stops there. ``centroid``: see `edge_offsets`."""
     s = a_m.shape[0]
     n = pts_side.shape[0]
     kd = deform_sigma.shape[0]
@@ -318,7 +382,7 @@ def homography_steps(
         if m == 0:
             return best_h, best_p, -1.0, found, False
         idx = np.nonzero(use)[0]
-        delta, ok = edge_offsets(img, proj[idx], normal[idx], search, min_drop)
+        delta, ok = edge_offsets(img, proj[idx], normal[idx], search, min_drop, centroid)
         good = np.nonzero(ok)[0]
         if len(good) < 10:
             return best_h, best_p, -1.0, found, False
@@ -436,19 +500,20 @@ def side_support(
 @compiled
 def pose_step(
     img, pa, pb, bright, polygon, curved, usable, pts_side, proj, jac, search, min_side_px,
-    min_drop,
+    min_drop, centroid,
 ):  # fmt: skip
     """One Gauss-Newton step of ``pipeline.edgefit.fit_edges``: the model's sides lie
     at ``pa``/``pb`` in the image, its samples at ``proj`` with ``jac`` (N x 2 x 6) their
-    derivatives by the pose (rvec, tvec). Returns (step, rms of the inliers after it,
-    inliers, sides they lie on, whether there were enough edges to take it)."""
+    derivatives by the pose (rvec, tvec); ``centroid``: see `edge_offsets`. Returns
+    (step, rms of the inliers after it, inliers, sides they lie on, whether there were
+    enough edges to take it)."""
     step = np.zeros(6)
     side_n, measured = _normals(pa, pb, bright, polygon, curved, usable, min_side_px)
     idx = np.nonzero(measured[pts_side])[0]
     normal = np.empty((len(idx), 2))
     for q in range(len(idx)):
         normal[q] = side_n[pts_side[idx[q]]]
-    delta, ok = edge_offsets(img, proj[idx], normal, search, min_drop)
+    delta, ok = edge_offsets(img, proj[idx], normal, search, min_drop, centroid)
     good = np.nonzero(ok)[0]
     if len(good) < 12:
         return step, -1.0, 0, 0, False

@@ -170,6 +170,7 @@ def fit_edges(
     *,
     iterations: int = 3,
     search_px: float = 2.5,
+    centroid: bool = False,
 ) -> EdgeFit | None:
     """Refine a pose so that the pad's polygons' sides lie on the image's edges.
 
@@ -179,6 +180,7 @@ def fit_edges(
     model : the pad's sides (:meth:`EdgeModel.from_polygons`).
     camera : intrinsics of ``image``.
     rvec, tvec : starting pose (OpenCV pad -> camera).
+    centroid : edges placed at their drops' centroid (`edge_kernels.edge_offsets`).
     """
     img = pixels(image)
     rvec = np.asarray(rvec, np.float64).reshape(3, 1).copy()
@@ -191,6 +193,7 @@ def fit_edges(
         step, rms, inliers, sides, ok = kernels.pose_step(
             img, pa, pb, model.bright, model.polygon, model.curved, usable,
             model.samples[1], proj, jac, float(search), MIN_SIDE_PX, kernels.MIN_DROP,
+            centroid,
         )  # fmt: skip
         if not ok:
             break

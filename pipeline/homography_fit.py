@@ -167,6 +167,7 @@ def fit_homography(
     deform: Deformation | None = None,
     min_clearance_px: float = MIN_CLEARANCE_PX,
     give_up_below: float = 0.0,
+    centroid: bool = False,
 ) -> HomographyFit | None:
     """Refine ``H0`` so that the model's sides lie on the edges of ``image``.
 
@@ -187,6 +188,8 @@ def fit_homography(
     give_up_below : a fit that has found less than this share of the sides after
         a few steps (``edge_kernels.GIVE_UP_STEPS``) stops there: for a caller that
         refuses far better fits anyway.
+    centroid : edges placed at their drops' centroid (`edge_kernels.edge_offsets`):
+        for a pose, not a detection.
 
     Returns
     -------
@@ -244,6 +247,7 @@ def fit_homography(
         DAMPING,
         MIN_DROP,
         float(give_up_below),
+        centroid,
     )
     if not ok:
         return None

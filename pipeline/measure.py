@@ -108,6 +108,12 @@ AFFINE_MIN_SUPPORT = 0.2  # of the pad's edges, for a pose from the H's affine p
 # 9 % of the pad's edges at least, the real photos' (their references drawn, not cut
 # from them) 1 %, and then 16 % of their H's.
 MIN_EDGES_FOUND = 0.05
+ALONG_GRID_DEG = 3.0  # the H's sides this near the pixel grid: see `_unlocked`
+# ... and the most the centroid may move the H's corners: the lock's (0.39 px on each
+# of a corner's two sides) and a little noise. On the yaw sweep's square views it moved
+# them 0.34-0.62 px; on a far orange_ring in the real-world mix (H 23 px), 0.81, and
+# put the pad 6.0 % of its height off, not 2.1.
+MAX_UNLOCK_PX = 0.75
 HEADING_MARGIN = 0.05  # of the marks' edges: one half turn must find this many more
 
 
@@ -202,8 +208,69 @@ def measure(
                 edge_support(levels, reference.h_edges, cam, fit.rvec, fit.tvec) < MIN_EDGES_FOUND
             ):
                 continue
+            if min_support is None and _along_grid(Hs, reference):
+                again = _unlocked(reference, levels, cam, start, Hs, with_marks, gravity, view)
+                if again is not None:
+                    fit, lean = again
             return Measured(view.to_frame @ Hs, fit, support, ambiguous, told, lean)
     return None
+
+
+def _along_grid(H: np.ndarray, reference: Reference) -> bool:
+    """Whether ``H`` puts the H's sides along the pixel rows and columns (their
+    median within ``ALONG_GRID_DEG``), where the edge locator's parabola locks."""
+    model = reference.h_edges
+    d = apply_h(H, model.b_m) - apply_h(H, model.a_m)
+    off = np.degrees(np.arctan2(d[:, 1], d[:, 0])) % 90.0
+    return bool(np.median(np.minimum(off, 90.0 - off)) < ALONG_GRID_DEG)
+
+
+def _unlocked(
+    reference: Reference,
+    levels: np.ndarray,
+    cam: Camera,
+    start: np.ndarray,
+    Hs: np.ndarray,
+    with_marks: bool,
+    gravity: np.ndarray | None,
+    view: View,
+) -> tuple[EdgeFit, np.ndarray | None] | None:
+    """The pose (and lean) of a pad whose sides lie along the pixel grid, taken
+    again from its homography refitted with the edges at their drops' centroid
+    (`edge_kernels.edge_offsets`; hovering with the camera square to the pad, the
+    parabola's lock put the pad 0.92 % of its height off (median) against 0.28-0.56 %
+    at other yaws). The verdict stays the first pose's: the centroid's noise is not
+    what the detection's thresholds were tuned for."""
+    model = reference.edge_model if with_marks else reference.h_edges
+    free_rims = with_marks and gravity is not None
+    refit = fit_homography(
+        levels,
+        model,
+        start,
+        iterations=1,
+        search_px=1.5,
+        sides_alike=not with_marks,
+        deform=reference.hemmed_rims if free_rims else None,
+        centroid=True,
+    )
+    if refit is None:
+        return None
+    turned = refit.H @ np.linalg.solve(start, Hs)  # (the heading's half turn, if taken)
+    moved = apply_h(turned, reference.corners_m) - apply_h(Hs, reference.corners_m)
+    if np.hypot(moved[:, 0], moved[:, 1]).max() > MAX_UNLOCK_PX * max(view.scale, 1.0):
+        return None
+    fitted = _fit_pose(
+        reference,
+        levels,
+        cam,
+        turned,
+        reference.pose_points_m if with_marks else reference.corners_m,
+        polish=with_marks or cam.has_distortion,
+        gravity=gravity,
+        enlarged=max(view.scale, 1.0),
+        centroid=True,
+    )
+    return None if fitted is None else (fitted[0], fitted[3])
 
 
 def pad_box_m(reference: Reference) -> np.ndarray:
@@ -380,6 +447,7 @@ def _fit_pose(
     polish: bool,
     gravity: np.ndarray | None,
     enlarged: float = 1.0,
+    centroid: bool = False,
 ) -> tuple[EdgeFit, float, bool, np.ndarray | None] | None:
     """The camera's pose over the pad from the located homography, or None.
 
@@ -407,6 +475,7 @@ def _fit_pose(
     Returns the fit, the share of the whole pad's edges found where the pose
     puts them, whether it is ambiguous, and with the attitude how the homography
     alone leans the pad from level (`pipeline.pose.lean_rotation`; else None).
+    ``centroid``: the polish places the edges at their drops' centroid (`_unlocked`).
     """
     px = apply_h(H, pts_m)
     lean: np.ndarray | None = None
@@ -485,7 +554,9 @@ def _fit_pose(
     support = edge_support(levels, reference.edge_model, cam, fit.rvec, fit.tvec)
     if polish and (gravity is None or shown >= POLISH_SHOWN_PX_PER_RAD):
         model = reference.edge_model if gravity is None else reference.polish_model
-        refined = fit_edges(levels, model, cam, fit.rvec, fit.tvec, search_px=1.5)
+        refined = fit_edges(
+            levels, model, cam, fit.rvec, fit.tvec, search_px=1.5, centroid=centroid
+        )
         level = refined is not None and (
             gravity is None or tilt_from_level_deg(refined.rvec, gravity) < MAX_TILT_OFF_DEG
         )

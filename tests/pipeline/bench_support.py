@@ -17,6 +17,7 @@ from pipeline import Camera, Reference, process_frame
 from pipeline.bench.frames import SCENE_EVERY, make_scenes, make_view
 from pipeline.bench.hint import gravity_hint
 from pipeline.bench.photos import FOV_DEG, degraded_view, load_manifest
+from pipeline.bench.sweep import HOVER_TILT_DEG
 from pipeline.bench.tally import Tally
 from pipeline.render import get_design
 from pipeline.render.designs import Design, Disc, HShape, Rects, Ring
@@ -94,6 +95,19 @@ def sweep_frames(design: str, camera: Camera, point: int, altitude: float, j: in
     empty = render_view(scenes.empty, camera, view, np.random.default_rng(noise_seed))
     reference = _reference(design)
     return pad, empty, view, gravity_hint(view.R_pad_cam, [0, point, j, 12]), reference
+
+
+def yaw_frames(design: str, yaw_deg: float, j: int):
+    """Frame ``j`` of the first point of ``pipeline.bench --sweep yaw`` (its seeds) with
+    the camera turned ``yaw_deg``: the pad's frame, the view, the attitude hint and the
+    reference."""
+    d = get_design(design)
+    scenes = make_scenes(d, [0, 1000 + j // SCENE_EVERY % 4], "today", ())
+    view, noise_seed = make_view(
+        [0, 0, j, 11], CAM, d, "today", yaw_deg=yaw_deg, max_tilt_deg=HOVER_TILT_DEG
+    )
+    pad = render_view(scenes.pad, CAM, view, np.random.default_rng(noise_seed))
+    return pad, view, gravity_hint(view.R_pad_cam, [0, 0, j, 12]), _reference(design)
 
 
 @functools.lru_cache(maxsize=4)

@@ -87,6 +87,47 @@ def test_an_edge_is_found_where_it_is_and_only_with_the_right_polarity():
     assert not edge_offsets(faint, proj, normal, 3.0, MIN_DROP)[1].any()
 
 
+def _edge_along_a_column(at: float, blur: float) -> np.ndarray:
+    """A 40 x 40 picture, bright left of x = ``at``, dark right of it, each pixel the
+    share of it that is bright (area-sampled), blurred by ``blur`` px, in uint8."""
+    x = np.arange(40)
+    row = 40.0 + 160.0 * np.clip(at - (x - 0.5), 0.0, 1.0)
+    img = cv2.GaussianBlur(np.repeat(row[None, :], 40, axis=0), (0, 0), blur)
+    return np.round(img).astype(np.uint8)
+
+
+@pytest.mark.parametrize("blur", [0.5, 0.8, 1.2])
+def test_the_centroid_places_a_side_along_the_grid_at_any_phase(blur):
+    # Across a side along the pixel columns, the parabola's vertex locks to the grid
+    # (`edge_offsets`); the drops' centroid does not.
+    parabola, centroid = [], []
+    for at in np.arange(20.0, 21.0, 0.05):
+        img = _edge_along_a_column(at, blur)
+        proj = np.array([[at + 0.3, 20.0], [at - 0.4, 12.0]])  # put a little off, as a fit's
+        normal = np.array([[1.0, 0.0], [1.0, 0.0]])
+        for out, use in ((parabola, False), (centroid, True)):
+            delta, ok = edge_offsets(img, proj, normal, 2.5, MIN_DROP, use)
+            assert ok.all()
+            out.extend(proj[:, 0] + delta - at)
+    assert np.abs(parabola).max() > 0.25
+    assert np.abs(centroid).max() < 0.16
+    assert abs(np.mean(centroid)) < 0.03
+
+
+def test_the_centroid_of_a_wide_edge_samples_beyond_the_search():
+    # A 1.6 px blur spreads the drops over some 4 px, beyond a search of 1.5 px each
+    # side: the samples past it are taken too, and the edge lies where it is.
+    errors = []
+    for at in np.arange(20.0, 21.0, 0.05):
+        proj = np.array([[at, 20.0], [at + 0.7, 12.0]])
+        delta, ok = edge_offsets(
+            _edge_along_a_column(at, 1.6), proj, np.array([[1.0, 0.0]] * 2), 1.5, MIN_DROP, True
+        )
+        errors.extend((proj[:, 0] + delta - at)[ok])
+    assert len(errors) > 30
+    assert np.abs(errors).max() < 0.05
+
+
 def _drawn(polygon_m: np.ndarray, H: np.ndarray) -> np.ndarray:
     """A 640 x 480 picture of the polygon put by ``H``, bright on dark, drawn 8x finer
     and averaged (its edges anti-aliased as a camera's are)."""
