@@ -161,11 +161,12 @@ def test_attitude_hint_and_tracking_runs(capsys) -> None:
     out = run_designs(["default"], 3, 0, [DEFAULT_METHOD], hint=True)
     assert out["designs"]["default"]["attitude_hint_deg"] > 0
     track = run_track(frames=12, seed=0)
-    for res in ("640x480", "1920x1080"):
-        r = track[res]
-        assert set(r["found_by"]) <= {"follow", "track", "search", "missed"}
-        assert sum(r["found_by"].values()) == 12
-        assert r["ms_cold"]["median"] > 0
-    # Most of a descent is followed or tracked from frame to frame.
-    ways = track["640x480"]["found_by"]
-    assert ways.get("follow", 0) + ways.get("track", 0) >= 8
+    for run in (track, track["facing_the_pad"]):
+        for res in ("640x480", "1920x1080"):
+            r = run[res]
+            assert set(r["found_by"]) <= {"follow", "track", "search", "missed"}
+            assert sum(r["found_by"].values()) == 12
+            assert r["ms_cold"]["median"] > 0
+        # Most of a descent is followed or tracked from frame to frame.
+        ways = run["640x480"]["found_by"]
+        assert ways.get("follow", 0) + ways.get("track", 0) >= 8
