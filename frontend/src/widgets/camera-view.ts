@@ -2,6 +2,7 @@
 // decoded off the main thread (createImageBitmap) and only the newest one is kept:
 // a slow page draws fewer frames, it never falls behind.
 
+import { detectionBadge } from "../lib/badge";
 import { fmt } from "../lib/format";
 import type { BinaryFrame, FrameMessage, Point } from "../lib/protocol";
 import { RateMeter } from "../lib/ring";
@@ -246,10 +247,11 @@ export function mountCameraView(root: HTMLElement, ctx: Ctx): void {
     setText(stats.display, fmt(shown.rate(performance.now()), 1, "fps"));
     setText(stats.dropped, p?.dropped === undefined ? "—" : String(p.dropped));
     setText(stats.size, f ? `${f.width}×${f.height} #${f.seq}` : "—");
-    const detected = Boolean(f?.result.detected);
-    setText(badge, detected ? `H LOCKED · ${fmt(f?.result.pose?.position_m?.[2], 2, "m")}` : f ? "NO H" : "NO DATA");
-    badge.classList.toggle("locked", detected);
-    badge.title = f?.result.reason ?? "";
+    const said = detectionBadge(f);
+    setText(badge, said.text);
+    badge.classList.toggle("locked", said.state === "locked");
+    badge.classList.toggle("ambiguous", said.state === "ambiguous");
+    badge.title = said.title;
     if (performance.now() - lastDrawn > 3000) {
       placeholder.hidden = false;
       setText(placeholder, current ? "Camera frames stopped" : "Waiting for camera frames…");

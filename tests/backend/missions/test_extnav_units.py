@@ -18,6 +18,7 @@ from backend.missions.extnav import (
     extnav_missing,
     land_mission,
 )
+from backend.missions.mission import AMBIGUOUS_NOTE
 from pipeline import Camera, FrameResult, Pose
 
 PAD = (2.0, 1.0, 0.0)
@@ -213,3 +214,22 @@ def test_velocity_from_recent_positions():
     assert v.velocity() == pytest.approx((0.5, -0.2, 0.0), abs=1e-9)
     v.add(10, (0.0, 0.0, 0.0))  # the vehicle's clock went back (a reboot): start over
     assert v.velocity() is None
+
+
+def test_an_ambiguous_pose_is_no_fix():
+    # A pose made without the attitude that the pixels do not pin (another, tilted the
+    # other way, fits as well; or a look-alike taken for a tilted pad) guides nothing.
+    link = RecordingLink(telemetry(*PAD[:2]))
+    mission = LandMission(link, LandConfig(strategy="guided"), now=0.0)
+    seen = sample((PAD[0], PAD[1], -4.0), 0.05)
+    assert seen.result.pose is not None
+    unsure = replace(
+        seen, result=replace(seen.result, pose=replace(seen.result.pose, ambiguous=True))
+    )
+    mission.step(0.05, unsure)
+    mission.step(0.1, unsure)
+    assert mission.fix is None and mission.record.detections == 0
+    assert mission.record.frames == 2
+    assert mission.record.notes.count(AMBIGUOUS_NOTE) == 1
+    mission.step(0.15, replace(seen, t_capture=0.15))
+    assert mission.fix is not None and mission.record.detections == 1
