@@ -255,7 +255,8 @@ def _unlocked(
     )
     if refit is None:
         return None
-    turned = refit.H @ np.linalg.solve(start, Hs)  # (the heading's half turn, if taken)
+    # (`_heading` returns its start itself, or it turned half about the H's centre)
+    turned = refit.H if Hs is start else refit.H @ half_turn(reference.h_centre_m)
     moved = apply_h(turned, reference.corners_m) - apply_h(Hs, reference.corners_m)
     if np.hypot(moved[:, 0], moved[:, 1]).max() > MAX_UNLOCK_PX * max(view.scale, 1.0):
         return None
