@@ -187,19 +187,7 @@ def measure(
         starts.append((affine, False, AFFINE_MIN_SUPPORT))
     for start, with_marks, min_support in starts:
         Hs, told = _heading(start, reference, levels)
-        # The marks' points are measured only where the marks were found: placed by the
-        # H's homography alone they add no evidence, only a count that outweighs the
-        # attitude.
-        fitted = _fit_pose(
-            reference,
-            levels,
-            cam,
-            Hs,
-            reference.pose_points_m if with_marks else reference.corners_m,
-            polish=with_marks or cam.has_distortion,
-            gravity=gravity,
-            enlarged=max(view.scale, 1.0),
-        )
+        fitted = _pose_of(reference, levels, cam, Hs, with_marks, gravity, view)
         if fitted is not None and (min_support is None or fitted[1] >= min_support):
             fit, support, ambiguous, lean = fitted
             if camera_height_m(fit.rvec, fit.tvec) <= 0.0:
@@ -260,18 +248,35 @@ def _unlocked(
     moved = apply_h(turned, reference.corners_m) - apply_h(Hs, reference.corners_m)
     if np.hypot(moved[:, 0], moved[:, 1]).max() > MAX_UNLOCK_PX * max(view.scale, 1.0):
         return None
-    fitted = _fit_pose(
+    fitted = _pose_of(reference, levels, cam, turned, with_marks, gravity, view, centroid=True)
+    return None if fitted is None else (fitted[0], fitted[3])
+
+
+def _pose_of(
+    reference: Reference,
+    levels: np.ndarray,
+    cam: Camera,
+    H: np.ndarray,
+    with_marks: bool,
+    gravity: np.ndarray | None,
+    view: View,
+    centroid: bool = False,
+) -> tuple[EdgeFit, float, bool, np.ndarray | None] | None:
+    """`_fit_pose` on the points ``H`` places in ``view``: the marks' only where the
+    marks were found (placed by the H's homography alone they add no evidence, only a
+    count that outweighs the attitude), then polished on the pad's edges where they
+    were, or where the lens's distortion is more than a homography follows."""
+    return _fit_pose(
         reference,
         levels,
         cam,
-        turned,
+        H,
         reference.pose_points_m if with_marks else reference.corners_m,
         polish=with_marks or cam.has_distortion,
         gravity=gravity,
         enlarged=max(view.scale, 1.0),
-        centroid=True,
+        centroid=centroid,
     )
-    return None if fitted is None else (fitted[0], fitted[3])
 
 
 def pad_box_m(reference: Reference) -> np.ndarray:

@@ -15,7 +15,7 @@ export interface Badge {
 export function detectionBadge(frame: FrameMessage | null): Badge {
   if (!frame) return { text: "NO DATA", state: "none", title: "" };
   const result = frame.result;
-  if (!result.detected) return { text: "NO H", state: "none", title: result.reason ?? "" };
+  if (!result.detected) return { text: "NO H", state: "none", title: result.reason };
   const pose = result.pose;
   if (pose?.ambiguous) {
     return {
@@ -26,5 +26,5 @@ export function detectionBadge(frame: FrameMessage | null): Badge {
         "no vehicle attitude came with this frame. Missions do not use such a pose.",
     };
   }
-  return { text: `H LOCKED · ${fmt(pose?.position_m?.[2], 2, "m")}`, state: "locked", title: result.reason ?? "" };
+  return { text: `H LOCKED · ${fmt(pose?.position_m?.[2], 2, "m")}`, state: "locked", title: result.reason };
 }

@@ -1,6 +1,7 @@
 import { describe, expect, it } from "vitest";
-import { encodeBinaryFrame, type FrameMessage, type ServerMessage, type Status } from "../../src/lib/protocol";
+import { encodeBinaryFrame, type ServerMessage, type Status } from "../../src/lib/protocol";
 import { Store } from "../../src/lib/store";
+import { frameMessage } from "./frames";
 
 // Fixtures carry only what a test reads: typed as wire data the store accepts as is.
 // eslint-disable-next-line @typescript-eslint/no-explicit-any
@@ -30,32 +31,6 @@ const REF = {
   image_size: [640, 480] as [number, number],
   images: { original: "/o", threshold: "/t", corners: "/c" },
 };
-
-function frame(seq: number, detected = true): FrameMessage {
-  return {
-    type: "frame",
-    seq,
-    t_capture: 1000 + seq,
-    latency_ms: 12,
-    width: 640,
-    height: 480,
-    result: {
-      detected,
-      corners_px: [],
-      hu: [0.2, 0.01, 0, 0, 0, 0, 0],
-      orientation_deg: 5,
-      eccentricity: 1.2,
-      pose: null,
-      timings_ms: {},
-      contour_px: [],
-      found_by: detected ? "search" : "",
-      score: 0.9,
-      reason: "",
-    },
-    overlay: { reference_corners: [], axes: null, target: null },
-    reference_distance: 0.01 * seq,
-  };
-}
 
 describe("Store", () => {
   it("takes the whole state from hello and tells each topic", () => {
@@ -130,7 +105,7 @@ describe("Store", () => {
 
   it("keeps a bounded history of invariants and pairs images with their frame", () => {
     const store = new Store({ historySize: 5 });
-    for (let seq = 1; seq <= 40; seq += 1) store.apply(frame(seq, seq % 2 === 0));
+    for (let seq = 1; seq <= 40; seq += 1) store.apply(frameMessage(seq, seq % 2 === 0));
     expect(store.history.length).toBe(5);
     expect(store.history.toArray().map((s) => s.seq)).toEqual([36, 37, 38, 39, 40]);
     expect(store.history.last()).toMatchObject({ detected: true, distance: 0.4, orientationDeg: 5 });
