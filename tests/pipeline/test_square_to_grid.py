@@ -36,4 +36,4 @@ def test_a_pad_square_to_the_grid_is_posed_as_at_any_other_yaw(hint, monkeypatch
     monkeypatch.setattr(pipeline.measure, "ALONG_GRID_DEG", -1.0)  # as it was
     locked, found_locked = _hovering_square(hint)
     assert locked.summary()["position_error_pct"]["median"] > 1.5 * error
-    assert found == found_locked  # the verdicts are the first pose's
+    assert found == found_locked  # the detection is the parabola's
