@@ -26,8 +26,8 @@ def run_track(*, frames: int = 60, seed: int = 0, design: str = "default") -> di
     """The tracking run's JSON: per resolution, ms per frame tracking and cold, how
     each frame was found, and the tracked poses' errors (with the attitude hint); and
     the same descent facing the pad (``facing_the_pad``: the camera's yaw held square
-    to the pad's axes, as a landing turns the vehicle, where the pose is taken again
-    off the edge locator's lock, `pipeline.measure._unlocked`)."""
+    to the pad's axes, as a landing turns the vehicle, where the pose is taken from
+    the homography refitted off the edge locator's lock, `pipeline.measure._unlocked`)."""
     if frames < 2:
         raise ValueError(f"frames must be at least 2, got {frames}")
     use_one_core()

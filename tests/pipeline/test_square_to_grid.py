@@ -1,6 +1,7 @@
 """A pad whose H's sides lie along the pixel grid, as a camera facing the pad's
-heading sees it (the landing turns the vehicle so): the pose is taken again with the
-edges at their drops' centroid (``measure._unlocked``), where the parabola locks."""
+heading sees it (the landing turns the vehicle so): the pose is taken from the
+homography refitted with the edges at their drops' centroid (``measure._unlocked``),
+where the parabola locks."""
 
 from __future__ import annotations
 
@@ -36,4 +37,4 @@ def test_a_pad_square_to_the_grid_is_posed_as_at_any_other_yaw(hint, monkeypatch
     monkeypatch.setattr(pipeline.measure, "ALONG_GRID_DEG", -1.0)  # as it was
     locked, found_locked = _hovering_square(hint)
     assert locked.summary()["position_error_pct"]["median"] > 1.5 * error
-    assert found == found_locked  # the detection is the parabola's
+    assert found == found_locked  # (the H is found by the parabola either way)
