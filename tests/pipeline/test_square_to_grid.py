@@ -5,6 +5,7 @@ where the parabola locks."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 import pipeline.measure
@@ -38,3 +39,30 @@ def test_a_pad_square_to_the_grid_is_posed_as_at_any_other_yaw(hint, monkeypatch
     locked, found_locked = _hovering_square(hint)
     assert locked.summary()["position_error_pct"]["median"] > 1.5 * error
     assert found == found_locked  # (the H is found by the parabola either way)
+
+
+def test_where_the_refitted_homography_is_refused_the_locked_one_is_posed(monkeypatch) -> None:
+    # No view of the yaw sweep's 0-degree point (40 a design, ten designs, with and
+    # without the hint) has its refit's pose refused and its locked one's kept: the
+    # refusal is made here, to see the locked homography posed as without the refit.
+    frame, _, g, reference = yaw_frames("default", 0.0, 0)
+    refitted = process_frame(frame, reference, CAM, gravity_hint=g)
+    real = pipeline.measure._pose_of
+    posed: list[bool] = []
+
+    def refit_refused(*args, **kwargs):
+        centroid = args[7]  # (as `measure` passes it)
+        posed.append(centroid)
+        return None if centroid else real(*args, **kwargs)
+
+    monkeypatch.setattr(pipeline.measure, "_pose_of", refit_refused)
+    res = process_frame(frame, reference, CAM, gravity_hint=g)
+    assert posed[:2] == [True, False]  # the refit's pose first, then the locked one's
+    monkeypatch.setattr(pipeline.measure, "_pose_of", real)
+    monkeypatch.setattr(pipeline.measure, "ALONG_GRID_DEG", -1.0)  # no refit
+    locked = process_frame(frame, reference, CAM, gravity_hint=g)
+    assert res.detected and res.pose is not None and locked.pose is not None
+    assert np.array_equal(res.pose.position_m, locked.pose.position_m)
+    assert np.array_equal(res.corners_px, locked.corners_px)
+    # (where the refit's pose is kept, its corners lie off the lock's)
+    assert 0.0 < np.abs(refitted.corners_px - locked.corners_px).max() <= 0.75
