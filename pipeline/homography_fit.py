@@ -86,17 +86,33 @@ def seen_from_above(H: np.ndarray, pts_m: np.ndarray) -> bool:
     >>> seen_from_above(view @ np.array([[1.0, 0, 0], [0, 1, 0], [0.0, 0.9, 1]]), pts)
     False
     """
-    H = np.asarray(H, np.float64)
-    pts = np.asarray(pts_m, np.float64).reshape(-1, 2)
-    w = H[2, 0] * pts[:, 0] + H[2, 1] * pts[:, 1] + H[2, 2]
-    sign = np.sign(w[0])
-    if sign == 0 or np.any(np.sign(w) != sign):
-        return False
+    return _seen_from_above(plain(H), plain(pts_m).reshape(-1, 2), MAX_DEPTH_RATIO)
+
+
+@compiled_ieee
+def _seen_from_above(H, pts, max_ratio):
+    # (every pose asks this of its start: numpy's calls on a dozen points, compiled out)
+    sign = 0.0
+    lo, hi = np.inf, 0.0
+    for i in range(pts.shape[0]):
+        w = H[2, 0] * pts[i, 0] + H[2, 1] * pts[i, 1] + H[2, 2]
+        if not w > 0.0 and not w < 0.0:  # (on the vanishing line, or nan)
+            return False
+        s = 1.0 if w > 0.0 else -1.0
+        if i == 0:
+            sign = s
+        elif s != sign:
+            return False
+        lo, hi = min(lo, abs(w)), max(hi, abs(w))
     # The map's local area scale is det(H) / w^3: a view from above turns it negative.
-    if np.sign(np.linalg.det(H)) == sign:
+    det = (
+        H[0, 0] * (H[1, 1] * H[2, 2] - H[1, 2] * H[2, 1])
+        - H[0, 1] * (H[1, 0] * H[2, 2] - H[1, 2] * H[2, 0])
+        + H[0, 2] * (H[1, 0] * H[2, 1] - H[1, 1] * H[2, 0])
+    )
+    if (det > 0.0 and sign > 0.0) or (det < 0.0 and sign < 0.0):
         return False
-    w = np.abs(w)
-    return bool(w.max() <= MAX_DEPTH_RATIO * w.min())
+    return hi <= max_ratio * lo
 
 
 def apply_h(H: np.ndarray, pts: np.ndarray) -> np.ndarray:
@@ -147,12 +163,19 @@ def _span(p):
 
 def affine_part(H: np.ndarray, centre_m: np.ndarray) -> np.ndarray:
     """The affine map that agrees with ``H`` at ``centre_m`` to first order."""
-    x = np.asarray(centre_m, np.float64)
-    w = float(H[2, :2] @ x + H[2, 2])
-    at = (H[:2, :2] @ x + H[:2, 2]) / w
-    J = (H[:2, :2] - np.outer(at, H[2, :2])) / w
+    x, y = (float(v) for v in np.asarray(centre_m, np.float64).reshape(2))
+    return _affine_part(plain(H), x, y)
+
+
+@compiled_ieee
+def _affine_part(H, x, y):
+    w = H[2, 0] * x + H[2, 1] * y + H[2, 2]
+    at = ((H[0, 0] * x + H[0, 1] * y + H[0, 2]) / w, (H[1, 0] * x + H[1, 1] * y + H[1, 2]) / w)
     A = np.eye(3)
-    A[:2, :2], A[:2, 2] = J, at - J @ x
+    for r in range(2):
+        for c in range(2):
+            A[r, c] = (H[r, c] - at[r] * H[2, c]) / w
+        A[r, 2] = at[r] - (A[r, 0] * x + A[r, 1] * y)
     return A
 
 

@@ -23,21 +23,23 @@ from pipeline.homography_fit import (
     HomographyFit,
     affine_part,
     apply_h,
+    apply_point,
     fit_homography,
     seen_from_above,
     span_of,
 )
 from pipeline.homography_fit import support as edge_share
+from pipeline.jit import compiled, plain
 from pipeline.pose import (
     camera_height_m,
     half_turn,
     ippe_candidates,
     lean_rotation,
-    project,
     refine_with_gravity,
     tilt_deg,
     tilt_from_level_deg,
 )
+from pipeline.planar_projection import reprojection_rms
 from pipeline.preprocess import smooth_channel
 from pipeline.reference import Reference
 from pipeline.view import MAX_ENLARGEMENT, View
@@ -216,9 +218,20 @@ def _along_grid(H: np.ndarray, reference: Reference) -> bool:
     """Whether ``H`` puts the H's sides along the pixel rows and columns (their
     median within ``ALONG_GRID_DEG``), where the edge locator's parabola locks."""
     model = reference.h_edges
-    d = apply_h(H, model.b_m) - apply_h(H, model.a_m)
-    off = np.degrees(np.arctan2(d[:, 1], d[:, 0])) % 90.0
-    return bool(np.median(np.minimum(off, 90.0 - off)) < ALONG_GRID_DEG)
+    return bool(_off_grid_deg(plain(H), model.a_m, model.b_m) < ALONG_GRID_DEG)
+
+
+@compiled
+def _off_grid_deg(H, a_m, b_m):
+    """The median over the sides ``H`` puts in the image of their angle to the nearest
+    pixel row or column, degrees (asked of every pose's start: compiled)."""
+    off = np.empty(a_m.shape[0])
+    for j in range(a_m.shape[0]):
+        ax, ay = apply_point(H, a_m[j, 0], a_m[j, 1])
+        bx, by = apply_point(H, b_m[j, 0], b_m[j, 1])
+        deg = math.atan2(by - ay, bx - ax) * (180.0 / math.pi) % 90.0
+        off[j] = min(deg, 90.0 - deg)
+    return np.median(off)
 
 
 def _unlocked(
@@ -492,7 +505,7 @@ def _fit_pose(
     lean: np.ndarray | None = None
     cands = []
     for rvec0, tvec0 in ippe_candidates(pts_m, px, cam):
-        cands.append((_rms(pts_m, px, cam, rvec0, tvec0), tilt_deg(rvec0), rvec0, tvec0))
+        cands.append((reprojection_rms(pts_m, rvec0, tvec0, cam, px), tilt_deg(rvec0), rvec0, tvec0))
     # Both of IPPE's poses are refined only when they compete (a small pad
     # seen head on); otherwise the one that fits.
     cands.sort(key=lambda c: c[0])
@@ -505,7 +518,7 @@ def _fit_pose(
         obj = np.column_stack([pts_m, np.zeros(len(pts_m))])
         for i, (_, _, rvec0, tvec0) in enumerate(cands):
             rvec, tvec = cv2.solvePnPRefineLM(obj, px, cam.K, cam.dist, rvec0.copy(), tvec0.copy())
-            cands[i] = (_rms(pts_m, px, cam, rvec, tvec), tilt_deg(rvec), rvec, tvec)
+            cands[i] = (reprojection_rms(pts_m, rvec, tvec, cam, px), tilt_deg(rvec), rvec, tvec)
     if not cands:
         return None
     ambiguous = False
@@ -539,7 +552,7 @@ def _fit_pose(
                 break
             sigma_px *= 4.0
             rvec, tvec = refine_with_gravity(pts_m, px, cam, rvec, tvec, gravity, sigma_px=sigma_px)
-        fit = EdgeFit(rvec, tvec, _rms(pts_m, px, cam, rvec, tvec), len(pts_m), 0)
+        fit = EdgeFit(rvec, tvec, reprojection_rms(pts_m, rvec, tvec, cam, px), len(pts_m), 0)
         if fit.rms_px > MAX_LEVEL_BENT * _span(px):
             return None
     else:
@@ -588,11 +601,6 @@ def _tilt_shown(px: np.ndarray, cam: Camera, enlarged: float) -> float:
     """About how many of the frame's own pixels the pad's points move for a radian
     of its tilt (a view ``enlarged`` by interpolation shows no more than the frame)."""
     return _span(px) ** 2 / (cam.fx * enlarged)
-
-
-def _rms(pts_m: np.ndarray, px: np.ndarray, cam: Camera, rvec, tvec) -> float:
-    err = project(pts_m, rvec, tvec, cam) - px
-    return math.sqrt(float(np.sum(err**2, axis=1).sum()) / len(err))
 
 
 def _tie(a, b) -> bool:

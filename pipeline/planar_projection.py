@@ -10,6 +10,8 @@ a camera with the rational or thin-prism terms goes to OpenCV.
 
 from __future__ import annotations
 
+import math
+
 import cv2
 import numpy as np
 
@@ -31,11 +33,52 @@ def project_plane(
         obj = np.column_stack([pts, np.zeros(len(pts))])
         proj, jac = cv2.projectPoints(obj, r, t, camera.K, camera.dist)
         return proj.reshape(-1, 2), jac[:, :6].reshape(len(pts), 2, 6)
-    return _project(pts, r, t, camera.K, k)
+    return projected(pts, r, t, camera.K, k)
+
+
+def reprojection_rms(
+    pts_m: np.ndarray, rvec: np.ndarray, tvec: np.ndarray, camera: Camera, px: np.ndarray
+) -> float:
+    """The RMS distance (pixels) from pad points (N x 2 metres) projected under the
+    pose to ``px`` (N x 2): `project_plane`'s projection, without its derivatives."""
+    pts = plain(pts_m).reshape(-1, 2)
+    k = camera.brown_conrady
+    if k is None:
+        err = project_plane(pts, rvec, tvec, camera)[0] - px
+        return math.sqrt(float(np.sum(err**2)) / len(err))
+    r = plain(rvec).reshape(3)
+    t = plain(tvec).reshape(3)
+    return _rms(pts, r, t, camera.K, k, plain(px).reshape(-1, 2))
 
 
 @compiled
-def _rotation_and_derivatives(r):
+def _rms(pts, r, t, K, k, px):
+    R, _ = rotation_and_derivatives(r)
+    acc = 0.0
+    for q in range(pts.shape[0]):
+        u, v = _pixel(R, t, K, k, pts[q, 0], pts[q, 1])
+        acc += (u - px[q, 0]) ** 2 + (v - px[q, 1]) ** 2
+    return math.sqrt(acc / pts.shape[0])
+
+
+@compiled
+def _pixel(R, t, K, k, px, py):
+    """Where pad point (px, py) lies in the image (`_project`'s arithmetic)."""
+    X = R[0, 0] * px + R[0, 1] * py + t[0]
+    Y = R[1, 0] * px + R[1, 1] * py + t[1]
+    Z = R[2, 0] * px + R[2, 1] * py + t[2]
+    iz = 1.0 / Z if Z != 0.0 else 1.0
+    x, y = X * iz, Y * iz
+    k1, k2, p1, p2, k3 = k[0], k[1], k[2], k[3], k[4]
+    r2 = x * x + y * y
+    radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
+    xd = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x)
+    yd = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y
+    return K[0, 0] * xd + K[0, 2], K[1, 1] * yd + K[1, 2]
+
+
+@compiled
+def rotation_and_derivatives(r):
     """R = Rodrigues(r) and dR/dr_i (3 x 3 x 3, i last), by Gallego and Yezzi's
     closed form: dR/dr_i = (r_i [r]x + [r x (I - R) e_i]x) R / |r|^2."""
     theta2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
@@ -74,9 +117,11 @@ def _skew(v):
 
 
 @compiled
-def _project(pts, r, t, K, k):
+def projected(pts, r, t, K, k):
+    """`project_plane`'s pixels and derivatives, for compiled loops (``k``: the
+    camera's `brown_conrady` coefficients)."""
     n = pts.shape[0]
-    R, dR = _rotation_and_derivatives(r)
+    R, dR = rotation_and_derivatives(r)
     fx, fy, cx, cy = K[0, 0], K[1, 1], K[0, 2], K[1, 2]
     k1, k2, p1, p2, k3 = k[0], k[1], k[2], k[3], k[4]
     proj = np.empty((n, 2))

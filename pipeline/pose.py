@@ -9,7 +9,7 @@ import numpy as np
 
 from pipeline.camera import Camera
 from pipeline.jit import compiled, plain, solve
-from pipeline.planar_projection import project_plane
+from pipeline.planar_projection import project_plane, projected, rotation_and_derivatives
 from pipeline.result import Pose, yaw_of
 
 # A 180 degree turn about the pad's z axis.
@@ -181,7 +181,10 @@ def lean_rotation(rvec: np.ndarray, gravity_cam: np.ndarray) -> np.ndarray:
     """
     up = -np.asarray(gravity_cam, np.float64).reshape(3)
     n = pad_normal_in_camera(rvec)
-    axis = np.cross(up, n)
+    # (np.cross's products, written out: its call costs more than a frame's use of it)
+    axis = np.array(
+        [up[1] * n[2] - up[2] * n[1], up[2] * n[0] - up[0] * n[2], up[0] * n[1] - up[1] * n[0]]
+    )
     s = math.sqrt(float(axis @ axis))
     return axis * (math.atan2(s, float(up @ n)) / s) if s > 1e-12 else np.zeros(3)
 
@@ -225,14 +228,18 @@ def refine_with_gravity(
     >>> bool(np.abs(to_pose(r1, t1, 0.0, True).position_m - [0.2, -0.1, 5.0]).max() < 1e-3)
     True
     """
-    pts = np.asarray(points_m, np.float64).reshape(-1, 2)
-    img = np.asarray(image_px, np.float64).reshape(-1, 2)
+    pts = plain(points_m).reshape(-1, 2)
+    img = plain(image_px).reshape(-1, 2)
     g = np.asarray(gravity_cam, np.float64).reshape(3)
     g = g / math.sqrt(float(g.dot(g)))
     r = np.asarray(rvec, np.float64).reshape(3).copy()
     t = np.asarray(tvec, np.float64).reshape(3).copy()
     w_px = 1.0 / sigma_px
     w_g = 1.0 / np.radians(sigma_deg)
+    k = camera.brown_conrady
+    if k is not None:  # (a frame takes a few of these fits: their loop compiled)
+        _gravity_steps(pts, img, r, t, camera.K, k, g, w_px, w_g, iterations)
+        return r.reshape(3, 1), t.reshape(3, 1)
     for _ in range(iterations):
         proj, jac = project_plane(pts, r, t, camera)
         R, dR = cv2.Rodrigues(r)  # dR: d(R's 9 entries, row by row) / d(rvec), 3 x 9
@@ -244,6 +251,27 @@ def refine_with_gravity(
         if np.abs(step).max() < 1e-6:  # a micro-radian, a micrometre
             break
     return r.reshape(3, 1), t.reshape(3, 1)
+
+
+@compiled
+def _gravity_steps(pts, img, r, t, K, k, g, w_px, w_g, iterations):
+    """`refine_with_gravity`'s steps, ``r`` and ``t`` in place, for a camera of
+    OpenCV's Brown-Conrady model (``k``)."""
+    dR = np.empty((3, 9))  # (cv2.Rodrigues' layout: d(R row by row) / d(rvec))
+    for _ in range(iterations):
+        proj, jac = projected(pts, r, t, K, k)
+        R, dRr = rotation_and_derivatives(r)
+        for i in range(3):
+            for a in range(3):
+                for b in range(3):
+                    dR[i, 3 * a + b] = dRr[a, b, i]
+        step, solved = _gravity_step(proj, jac.reshape(-1, 6), img, R, dR, g, w_px, w_g)
+        if not solved:
+            break
+        r += step[:3]
+        t += step[3:]
+        if np.abs(step).max() < 1e-6:  # a micro-radian, a micrometre
+            break
 
 
 @compiled
