@@ -25,7 +25,7 @@ import numpy as np
 from pipeline import edge_kernels as kernels
 from pipeline.camera import Camera
 from pipeline.jit import compiled, pixels, plain
-from pipeline.planar_projection import project_plane
+from pipeline.planar_projection import plane_pixels, project_plane
 
 MIN_SIDE_PX = 7.0  # sides shorter than this in the image are not sampled
 END_MARGIN = 0.12  # at most this share of a straight side is left out at each end
@@ -215,7 +215,7 @@ def edge_support(image: np.ndarray, model: EdgeModel, camera: Camera, rvec, tvec
     the side bars and the board's outline will not be where the pose says.
     """
     pa, pb, usable = _sides_in_view(model, camera, rvec, tvec, 0.0)
-    proj, _ = project_plane(model.samples[0], rvec, tvec, camera)
+    proj = plane_pixels(model.samples[0], rvec, tvec, camera)
     return kernels.pose_support(
         pixels(image), pa, pb, model.bright, model.polygon,
         model.curved, usable, model.samples[1], proj, MIN_SIDE_PX, kernels.MIN_DROP,
@@ -268,7 +268,7 @@ def _clearance_m(
 def _sides_in_view(model: EdgeModel, camera: Camera, rvec, tvec, min_clearance_px: float):
     """The model's sides' ends in the image, and which sides lie at least
     ``min_clearance_px`` from a side alongside them."""
-    ends, _ = project_plane(model.ends, rvec, tvec, camera)
+    ends = plane_pixels(model.ends, rvec, tvec, camera)
     R, _ = cv2.Rodrigues(rvec)
     depth = 0.5 * (model.a_m + model.b_m) @ R[2, :2] + float(np.asarray(tvec).ravel()[2])
     clearance_px = model.clearance_m * camera.fx / np.maximum(depth, 1e-6)

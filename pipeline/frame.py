@@ -38,6 +38,7 @@ from pipeline.camera import Camera
 from pipeline.candidates import MIN_EVIDENCE, fit_h_sides
 from pipeline.find import FIRST_LOOK_MIN_SPAN_PX, CandidateVerifier, Stages, Tally, search
 from pipeline.homography_fit import apply_h, span_of
+from pipeline.jit import compiled_ieee, plain
 from pipeline.measure import MEASURE_SPAN_PX, Measured, measure, pad_box_m
 from pipeline.moments import shape_moments
 from pipeline.pose import pick_by_yaw, to_pose
@@ -449,11 +450,26 @@ def _motion(prior: FrameResult | None, H: np.ndarray) -> np.ndarray | None:
     frame pixels), or None."""
     if prior is None or not prior.detected or prior.homography is None:
         return None
-    try:
-        motion = H @ np.linalg.inv(prior.homography)
-    except np.linalg.LinAlgError:
-        return None
-    return motion / motion[2, 2] if np.isfinite(motion).all() and motion[2, 2] != 0 else None
+    motion = _over(plain(H), plain(prior.homography))
+    return motion if np.isfinite(motion).all() else None
+
+
+@compiled_ieee
+def _over(H, G):
+    """``H @ inv(G)``, scaled to 1 at [2, 2] (inf or nan where that is 0): G's inverse up to
+    its scale is its adjugate (LAPACK's general inverse, called cold, cost a tracked
+    frame 0.1 ms)."""
+    adj = np.empty((3, 3))
+    for r in range(3):
+        for c in range(3):
+            r1, r2 = (c + 1) % 3, (c + 2) % 3
+            c1, c2 = (r + 1) % 3, (r + 2) % 3
+            adj[r, c] = G[r1, c1] * G[r2, c2] - G[r1, c2] * G[r2, c1]
+    out = np.empty((3, 3))
+    for r in range(3):
+        for c in range(3):
+            out[r, c] = H[r, 0] * adj[0, c] + H[r, 1] * adj[1, c] + H[r, 2] * adj[2, c]
+    return out / out[2, 2]
 
 
 def _window(image: np.ndarray, H: np.ndarray, reference: Reference, scale: float) -> View | None:

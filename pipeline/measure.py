@@ -30,6 +30,7 @@ from pipeline.homography_fit import (
 )
 from pipeline.homography_fit import support as edge_share
 from pipeline.jit import compiled, plain
+from pipeline.planar_projection import reprojection_rms
 from pipeline.pose import (
     camera_height_m,
     half_turn,
@@ -39,7 +40,6 @@ from pipeline.pose import (
     tilt_deg,
     tilt_from_level_deg,
 )
-from pipeline.planar_projection import reprojection_rms
 from pipeline.preprocess import smooth_channel
 from pipeline.reference import Reference
 from pipeline.view import MAX_ENLARGEMENT, View
@@ -505,7 +505,9 @@ def _fit_pose(
     lean: np.ndarray | None = None
     cands = []
     for rvec0, tvec0 in ippe_candidates(pts_m, px, cam):
-        cands.append((reprojection_rms(pts_m, rvec0, tvec0, cam, px), tilt_deg(rvec0), rvec0, tvec0))
+        cands.append(
+            (reprojection_rms(pts_m, rvec0, tvec0, cam, px), tilt_deg(rvec0), rvec0, tvec0)
+        )
     # Both of IPPE's poses are refined only when they compete (a small pad
     # seen head on); otherwise the one that fits.
     cands.sort(key=lambda c: c[0])

@@ -150,10 +150,12 @@ def hu_distance(a: np.ndarray, b: np.ndarray, *, count: int = 7, eps: float = 1e
 
 
 # --- moments ----------------------------------------------------------------------------
+# Raw moments are in the order m00 m10 m01 m20 m11 m02 m30 m21 m12 m03, central ones in
+# the order mu00 mu20 mu11 mu02 mu30 mu21 mu12 mu03.
 
 
-def _contour_central(pts: np.ndarray) -> tuple[dict[str, float], tuple[float, float]]:
-    """Central moments (up to order 3) of the polygon through ``pts``, and its centroid."""
+def _contour_central(pts: np.ndarray) -> tuple[np.ndarray, tuple[float, float]]:
+    """Central moments of the polygon through ``pts``, and its centroid."""
     # (numpy's numbers: integers, timedeltas, floats and complex; the kinds, not
     # np.issubdtype, which costs a frame more than the moments)
     if pts.dtype in (np.bool_, np.uint8) or pts.dtype.kind not in "iumfc":
@@ -171,18 +173,15 @@ def _contour_central(pts: np.ndarray) -> tuple[dict[str, float], tuple[float, fl
     span = float((pts.max(axis=0) - pts.min(axis=0)).max())
     if abs(m00) <= 1e-12 * max(span * span, 1.0):
         raise ValueError("shape: the contour encloses zero area")
-    m = dict(zip(_RAW, (float(v) for v in sums), strict=True))
     if m00 < 0:  # clockwise in these axes: every moment comes out negated
-        m = {k: -v for k, v in m.items()}
-    return _central_from_raw(m, origin)
-
-
-_RAW = ("m00", "m10", "m01", "m20", "m11", "m02", "m30", "m21", "m12", "m03")
+        sums = -sums
+    mu, cx, cy = _central_from_raw(sums)
+    return mu, (float(origin[0] + cx), float(origin[1] + cy))
 
 
 @compiled
 def _polygon_sums(pts):
-    """The raw moments ``_RAW`` of the polygon through ``pts`` (N x 2), by Green's
+    """The raw moments of the polygon through ``pts`` (N x 2), by Green's
     theorem over its edges (x0, y0) -> (x1, y1)."""
     out = np.zeros(10)
     n = pts.shape[0]
@@ -205,82 +204,90 @@ def _polygon_sums(pts):
     return out
 
 
-def _central_from_raw(
-    m: dict[str, float], origin: np.ndarray
-) -> tuple[dict[str, float], tuple[float, float]]:
-    """Central moments from raw moments taken about ``origin``."""
-    m00 = m["m00"]
-    cx, cy = m["m10"] / m00, m["m01"] / m00
-    mu = {
-        "mu00": m00,
-        "mu20": m["m20"] - cx * m["m10"],
-        "mu11": m["m11"] - cx * m["m01"],
-        "mu02": m["m02"] - cy * m["m01"],
-        "mu30": m["m30"] - 3 * cx * m["m20"] + 2 * cx * cx * m["m10"],
-        "mu21": m["m21"] - 2 * cx * m["m11"] - cy * m["m20"] + 2 * cx * cx * m["m01"],
-        "mu12": m["m12"] - 2 * cy * m["m11"] - cx * m["m02"] + 2 * cy * cy * m["m10"],
-        "mu03": m["m03"] - 3 * cy * m["m02"] + 2 * cy * cy * m["m01"],
-    }
-    return mu, (float(origin[0] + cx), float(origin[1] + cy))
+@compiled
+def _central_from_raw(m):
+    """Central moments from raw ones taken about some origin, and the centroid from
+    that origin."""
+    m00, m10, m01, m20, m11 = m[0], m[1], m[2], m[3], m[4]
+    m02, m30, m21, m12, m03 = m[5], m[6], m[7], m[8], m[9]
+    cx, cy = m10 / m00, m01 / m00
+    mu = np.array(
+        [
+            m00,
+            m20 - cx * m10,
+            m11 - cx * m01,
+            m02 - cy * m01,
+            m30 - 3 * cx * m20 + 2 * cx * cx * m10,
+            m21 - 2 * cx * m11 - cy * m20 + 2 * cx * cx * m01,
+            m12 - 2 * cy * m11 - cx * m02 + 2 * cy * cy * m10,
+            m03 - 3 * cy * m02 + 2 * cy * cy * m01,
+        ]
+    )
+    return mu, cx, cy
 
 
-def _mask_central(mask: np.ndarray) -> tuple[dict[str, float], tuple[float, float]]:
-    """Central moments (up to order 3) of a mask's non-zero pixels, and its centroid."""
+def _mask_central(mask: np.ndarray) -> tuple[np.ndarray, tuple[float, float]]:
+    """Central moments of a mask's non-zero pixels, and its centroid."""
     ys, xs = np.nonzero(mask)
     if xs.size == 0:
         raise ValueError("shape: the mask has no pixels set (zero area)")
     cx, cy = xs.mean(), ys.mean()
     dx, dy = xs - cx, ys - cy
     dx2, dy2 = dx * dx, dy * dy
-    mu = {
-        "mu00": float(xs.size),
-        "mu20": float(dx2.sum()),
-        "mu11": float(np.dot(dx, dy)),
-        "mu02": float(dy2.sum()),
-        "mu30": float(np.dot(dx2, dx)),
-        "mu21": float(np.dot(dx2, dy)),
-        "mu12": float(np.dot(dx, dy2)),
-        "mu03": float(np.dot(dy2, dy)),
-    }
+    mu = np.array(
+        [
+            float(xs.size),
+            float(dx2.sum()),
+            float(np.dot(dx, dy)),
+            float(dy2.sum()),
+            float(np.dot(dx2, dx)),
+            float(np.dot(dx2, dy)),
+            float(np.dot(dx, dy2)),
+            float(np.dot(dy2, dy)),
+        ]
+    )
     return mu, (float(cx), float(cy))
 
 
-def _features(mu: dict[str, float], centroid: tuple[float, float]) -> ShapeMoments:
-    m00 = mu["mu00"]
-
-    def eta(p: int, q: int) -> float:
-        # Normalised central moment: mu_pq / mu_00^((p + q) / 2 + 1) (not eq. 4.13).
-        return mu[f"mu{p}{q}"] / m00 ** ((p + q) / 2 + 1)
-
-    n20, n11, n02 = eta(2, 0), eta(1, 1), eta(0, 2)
-    n30, n21, n12, n03 = eta(3, 0), eta(2, 1), eta(1, 2), eta(0, 3)
-    t0, t1 = n30 + n12, n21 + n03
-    q0, q1 = n30 - 3 * n12, 3 * n21 - n03
-    hu = (
-        n20 + n02,
-        (n20 - n02) ** 2 + 4 * n11 * n11,
-        q0 * q0 + q1 * q1,
-        t0 * t0 + t1 * t1,
-        q0 * t0 * (t0 * t0 - 3 * t1 * t1) + q1 * t1 * (3 * t0 * t0 - t1 * t1),
-        (n20 - n02) * (t0 * t0 - t1 * t1) + 4 * n11 * t0 * t1,
-        q1 * t0 * (t0 * t0 - 3 * t1 * t1) - q0 * t1 * (3 * t0 * t0 - t1 * t1),
+def _features(mu: np.ndarray, centroid: tuple[float, float]) -> ShapeMoments:
+    v = _invariants(mu)
+    return ShapeMoments(
+        area=float(mu[0]),
+        centroid=centroid,
+        hu=tuple(float(h) for h in v[:7]),  # type: ignore[arg-type]
+        orientation_deg=float(v[7]) + 0.0,  # no -0.0
+        eccentricity=float(v[8]),
     )
 
-    a, b, c = mu["mu20"] / m00, mu["mu11"] / m00, mu["mu02"] / m00
+
+@compiled
+def _invariants(mu):
+    """Hu's seven invariants, the orientation (degrees) and the eccentricity of the
+    central moments ``mu``, in that order (a frame's moments: compiled)."""
+    m00 = mu[0]
+    # Normalised central moments: mu_pq / mu_00^((p + q) / 2 + 1) (not eq. 4.13).
+    n20, n11, n02 = mu[1] / m00**2.0, mu[2] / m00**2.0, mu[3] / m00**2.0
+    n30, n21, n12, n03 = mu[4] / m00**2.5, mu[5] / m00**2.5, mu[6] / m00**2.5, mu[7] / m00**2.5
+    t0, t1 = n30 + n12, n21 + n03
+    q0, q1 = n30 - 3 * n12, 3 * n21 - n03
+    out = np.empty(9)
+    out[0] = n20 + n02
+    out[1] = (n20 - n02) ** 2 + 4 * n11 * n11
+    out[2] = q0 * q0 + q1 * q1
+    out[3] = t0 * t0 + t1 * t1
+    out[4] = q0 * t0 * (t0 * t0 - 3 * t1 * t1) + q1 * t1 * (3 * t0 * t0 - t1 * t1)
+    out[5] = (n20 - n02) * (t0 * t0 - t1 * t1) + 4 * n11 * t0 * t1
+    out[6] = q1 * t0 * (t0 * t0 - 3 * t1 * t1) - q0 * t1 * (3 * t0 * t0 - t1 * t1)
+    a, b, c = mu[1] / m00, mu[2] / m00, mu[3] / m00
     # Image y points down, so atan2's angle runs clockwise on screen: negate it.
     angle = -0.5 * math.degrees(math.atan2(2 * b, a - c))
     if angle <= -90.0:
         angle += 180.0
+    out[7] = angle
     half_sum, half_gap = (a + c) / 2, math.hypot((a - c) / 2, b)
     big, small = half_sum + half_gap, max(half_sum - half_gap, 0.0)
-    ecc = math.sqrt(max(0.0, 1.0 - small / big)) if big > 0 else 0.0
-    return ShapeMoments(
-        area=float(m00),
-        centroid=centroid,
-        hu=tuple(float(h) for h in hu),  # type: ignore[arg-type]
-        orientation_deg=angle + 0.0,  # no -0.0
-        eccentricity=ecc,
-    )
+    out[8] = math.sqrt(max(0.0, 1.0 - small / big)) if big > 0 else 0.0
+    return out
 
 
 def _hu_vector(h: object, name: str) -> np.ndarray:

@@ -36,6 +36,27 @@ def project_plane(
     return projected(pts, r, t, camera.K, k)
 
 
+def plane_pixels(
+    pts_m: np.ndarray, rvec: np.ndarray, tvec: np.ndarray, camera: Camera
+) -> np.ndarray:
+    """`project_plane`'s pixels alone (N x 2): a pose's checks project hundreds of
+    samples, whose derivatives they never read."""
+    pts = plain(pts_m).reshape(-1, 2)
+    k = camera.brown_conrady
+    if k is None:
+        return project_plane(pts, rvec, tvec, camera)[0]
+    return _pixels(pts, plain(rvec).reshape(3), plain(tvec).reshape(3), camera.K, k)
+
+
+@compiled
+def _pixels(pts, r, t, K, k):
+    R, _ = rotation_and_derivatives(r)
+    out = np.empty((pts.shape[0], 2))
+    for q in range(pts.shape[0]):
+        out[q, 0], out[q, 1] = _pixel(R, t, K, k, pts[q, 0], pts[q, 1])
+    return out
+
+
 def reprojection_rms(
     pts_m: np.ndarray, rvec: np.ndarray, tvec: np.ndarray, camera: Camera, px: np.ndarray
 ) -> float:
@@ -44,7 +65,7 @@ def reprojection_rms(
     pts = plain(pts_m).reshape(-1, 2)
     k = camera.brown_conrady
     if k is None:
-        err = project_plane(pts, rvec, tvec, camera)[0] - px
+        err = plane_pixels(pts, rvec, tvec, camera) - px
         return math.sqrt(float(np.sum(err**2)) / len(err))
     r = plain(rvec).reshape(3)
     t = plain(tvec).reshape(3)

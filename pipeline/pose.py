@@ -9,7 +9,12 @@ import numpy as np
 
 from pipeline.camera import Camera
 from pipeline.jit import compiled, plain, solve
-from pipeline.planar_projection import project_plane, projected, rotation_and_derivatives
+from pipeline.planar_projection import (
+    plane_pixels,
+    project_plane,
+    projected,
+    rotation_and_derivatives,
+)
 from pipeline.result import Pose, yaw_of
 
 # A 180 degree turn about the pad's z axis.
@@ -120,7 +125,7 @@ def project(points_m: np.ndarray, rvec: np.ndarray, tvec: np.ndarray, camera: Ca
     """Pixels of pad points (N x 2 on the pad plane, or N x 3)."""
     pts = np.asarray(points_m, np.float64)
     if pts.shape[1] == 2:
-        return project_plane(pts, rvec, tvec, camera)[0]  # (compiled: a frame asks a few)
+        return plane_pixels(pts, rvec, tvec, camera)  # (compiled: a frame asks a few)
     proj, _ = cv2.projectPoints(pts, rvec, tvec, camera.K, camera.dist)
     return proj.reshape(-1, 2)
 
