@@ -135,7 +135,9 @@ class Camera:
         # Pixel centres move with the scale: x' = (x + 0.5) * s - 0.5.
         K[0, 2] += 0.5 * sx - 0.5
         K[1, 2] += 0.5 * sy - 0.5
-        return Camera(width, height, K, self.dist.copy())
+        if width <= 0 or height <= 0 or not np.isfinite(K).all():
+            return Camera(width, height, K, self.dist)  # (which says what is wrong)
+        return self._like(int(width), int(height), K)
 
     def cropped(self, x0: int, y0: int, width: int, height: int) -> Camera:
         """The same camera for the window of ``width`` x ``height`` pixels at (x0, y0).
@@ -146,7 +148,21 @@ class Camera:
         K = self.K.copy()
         K[0, 2] -= x0
         K[1, 2] -= y0
-        return Camera(int(width), int(height), K, self.dist.copy())
+        if width <= 0 or height <= 0 or not np.isfinite(K).all():
+            return Camera(int(width), int(height), K, self.dist)  # (which says what is wrong)
+        return self._like(int(width), int(height), K)
+
+    def _like(self, width: int, height: int, K: np.ndarray) -> Camera:
+        """This camera's lens at another size or window: checked as this one was, and
+        its distortion (read-only) and its model shared (the pipeline takes a camera
+        for each window it looks at, a few a frame)."""
+        out = object.__new__(Camera)
+        K.setflags(write=False)
+        for name, value in (("width", width), ("height", height), ("K", K), ("dist", self.dist)):
+            object.__setattr__(out, name, value)
+        if "brown_conrady" in self.__dict__:
+            out.__dict__["brown_conrady"] = self.__dict__["brown_conrady"]
+        return out
 
     def undistort_points(self, pts: np.ndarray) -> np.ndarray:
         """Pixel points (N x 2) with the lens distortion removed (still in pixels)."""

@@ -71,6 +71,22 @@ def test_scaled_keeps_the_field_of_view():
     assert cam.K[0, 2] == pytest.approx(319.5)
 
 
+def test_a_window_or_size_of_a_camera_is_the_camera_checked_again():
+    cam = Camera(640, 480, Camera.from_fov(640, 480, 60.0).K, [-0.2, 0.05, 0.001, 0.0, 0.01])
+    assert cam.brown_conrady is not None  # (worked out once, shared with the windows)
+    for view in (cam.cropped(100, 50, 200, 150), cam.cropped(100, 50, 200, 150).scaled(300, 225)):
+        again = Camera(view.width, view.height, view.K, view.dist)
+        np.testing.assert_array_equal(view.K, again.K)
+        np.testing.assert_array_equal(view.brown_conrady, again.brown_conrady)
+        assert not view.K.flags.writeable and not view.dist.flags.writeable
+    with pytest.raises(ValueError, match="width and height"):
+        cam.cropped(0, 0, 0, 480)
+    with pytest.raises(ValueError, match="width and height"):
+        cam.scaled(320, -1)
+    with pytest.raises(ValueError, match="finite"):
+        cam.cropped(float("nan"), 0, 640, 480)
+
+
 @pytest.mark.parametrize(
     ("args", "word"),
     [((0, 480, 60), "width"), ((640, 480, 0), "hfov_deg"), ((640, 480, 180), "hfov_deg")],
