@@ -135,9 +135,7 @@ class Camera:
         # Pixel centres move with the scale: x' = (x + 0.5) * s - 0.5.
         K[0, 2] += 0.5 * sx - 0.5
         K[1, 2] += 0.5 * sy - 0.5
-        if width <= 0 or height <= 0 or not np.isfinite(K).all():
-            return Camera(width, height, K, self.dist)  # (which says what is wrong)
-        return self._like(int(width), int(height), K)
+        return self._like(width, height, K)
 
     def cropped(self, x0: int, y0: int, width: int, height: int) -> Camera:
         """The same camera for the window of ``width`` x ``height`` pixels at (x0, y0).
@@ -148,14 +146,15 @@ class Camera:
         K = self.K.copy()
         K[0, 2] -= x0
         K[1, 2] -= y0
-        if width <= 0 or height <= 0 or not np.isfinite(K).all():
-            return Camera(int(width), int(height), K, self.dist)  # (which says what is wrong)
-        return self._like(int(width), int(height), K)
+        return self._like(width, height, K)
 
     def _like(self, width: int, height: int, K: np.ndarray) -> Camera:
-        """This camera's lens at another size or window: checked as this one was, and
-        its distortion (read-only) and its model shared (the pipeline takes a camera
-        for each window it looks at, a few a frame)."""
+        """This camera's lens at another size or window, its distortion (read-only) and
+        its model shared: checked as a new camera only where its size or matrix is
+        off (the pipeline takes a camera for each window it looks at, a few a frame)."""
+        width, height = int(width), int(height)
+        if width <= 0 or height <= 0 or not np.isfinite(K).all():
+            return Camera(width, height, K, self.dist)  # (which says what is wrong)
         out = object.__new__(Camera)
         K.setflags(write=False)
         for name, value in (("width", width), ("height", height), ("K", K), ("dist", self.dist)):

@@ -84,7 +84,7 @@ def _rms(pts, r, t, K, k, px):
 
 @compiled
 def _pixel(R, t, K, k, px, py):
-    """Where pad point (px, py) lies in the image (`_project`'s arithmetic)."""
+    """Where pad point (px, py) lies in the image (`projected`'s arithmetic)."""
     X = R[0, 0] * px + R[0, 1] * py + t[0]
     Y = R[1, 0] * px + R[1, 1] * py + t[1]
     Z = R[2, 0] * px + R[2, 1] * py + t[2]

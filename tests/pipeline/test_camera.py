@@ -83,6 +83,8 @@ def test_a_window_or_size_of_a_camera_is_the_camera_checked_again():
         cam.cropped(0, 0, 0, 480)
     with pytest.raises(ValueError, match="width and height"):
         cam.scaled(320, -1)
+    with pytest.raises(ValueError, match="width and height"):
+        cam.cropped(0, 0, 0.5, 480)
     with pytest.raises(ValueError, match="finite"):
         cam.cropped(float("nan"), 0, 640, 480)
 
