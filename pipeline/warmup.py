@@ -16,8 +16,8 @@ import numpy as np
 
 def warm_up() -> float:
     """Process two rendered frames of the default pad (with and without the attitude,
-    which take different paths) and one without it, so that every compiled loop is
-    compiled and cached. Returns the seconds it took."""
+    which take different paths), the second again as tracked, and one without the pad,
+    so that every compiled loop is compiled and cached. Returns the seconds it took."""
     from pipeline import Camera, Reference, process_frame
     from pipeline.render import camera_rotation, make_pad_image, make_scene, render
 
@@ -28,8 +28,13 @@ def warm_up() -> float:
     scene = make_scene(pad, 0.55, rng=np.random.default_rng(0), floor="plain")
     frame = render(scene, camera, np.array([0.05, -0.05, 2.0]), camera_rotation(20.0))
     for gravity in (None, np.array([0.0, 0.0, 1.0])):
-        if not process_frame(frame, reference, camera, gravity_hint=gravity).detected:
+        found = process_frame(frame, reference, camera, gravity_hint=gravity)
+        if not found.detected:
             raise RuntimeError("the warm-up frame's pad was not found: the vision is broken")
+    # ... and followed into the next frame (tracking's own steps).
+    followed = process_frame(frame, reference, camera, gravity_hint=gravity, prior=found)
+    if followed.found_by != "follow":
+        raise RuntimeError("the warm-up frame's pad was not followed: the vision is broken")
     # A frame without the pad takes every search, and a dark square holding a bright
     # mark, the board search's loops.
     empty = np.full((camera.height, camera.width, 3), 120, np.uint8)
