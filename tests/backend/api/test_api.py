@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import cv2
 import numpy as np
 import pytest
@@ -273,7 +275,10 @@ def test_a_mount_set_while_running_is_kept_unless_one_is_given_at_start(tmp_path
 
 def _next_event(ws, kind: str) -> dict:
     for _ in range(200):
-        msg = ws.receive_json()
+        raw = ws.receive()
+        if "text" not in raw:
+            continue  # a camera or threshold picture (binary), sent whenever one is ready
+        msg = json.loads(raw["text"])
         if msg["type"] == "event" and msg["kind"] == kind:
             return msg
     raise AssertionError(f"no {kind} event")
