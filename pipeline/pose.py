@@ -249,11 +249,7 @@ def refine_with_gravity(
         proj, jac = project_plane(pts, r, t, camera)
         R, dR = cv2.Rodrigues(r)  # dR: d(R's 9 entries, row by row) / d(rvec), 3 x 9
         step, solved = _gravity_step(proj, jac.reshape(-1, 6), img, R, dR, g, w_px, w_g)
-        if not solved:
-            break
-        r += step[:3]
-        t += step[3:]
-        if np.abs(step).max() < 1e-6:  # a micro-radian, a micrometre
+        if not solved or _stepped(r, t, step):
             break
     return r.reshape(3, 1), t.reshape(3, 1)
 
@@ -271,12 +267,17 @@ def _gravity_steps(pts, img, r, t, K, k, g, w_px, w_g, iterations):
                 for b in range(3):
                     dR[i, 3 * a + b] = dRr[a, b, i]
         step, solved = _gravity_step(proj, jac.reshape(-1, 6), img, R, dR, g, w_px, w_g)
-        if not solved:
+        if not solved or _stepped(r, t, step):
             break
-        r += step[:3]
-        t += step[3:]
-        if np.abs(step).max() < 1e-6:  # a micro-radian, a micrometre
-            break
+
+
+@compiled
+def _stepped(r, t, step):
+    """Adds a Gauss-Newton ``step`` to (``r``, ``t``) in place; True once it is
+    under a micro-radian and a micrometre (converged)."""
+    r += step[:3]
+    t += step[3:]
+    return np.abs(step).max() < 1e-6
 
 
 @compiled
