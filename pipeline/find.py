@@ -35,7 +35,7 @@ from pipeline.measure import MIN_MARKS_FOUND, pad_box_m, pad_marks
 from pipeline.preprocess import Binarized
 from pipeline.reference import Reference
 from pipeline.shapes import Region, regions
-from pipeline.strokes import cut_through, stroke_samples
+from pipeline.strokes import MAX_NOTCH_FILL, cut_through, notch_fill, stroke_samples
 from pipeline.template import compare, pad_pattern, pattern_box
 
 MIN_TEMPLATE_NCC = 0.4  # with the reference picture around the H
@@ -411,9 +411,19 @@ def _check(
     # in 1 of 60 empty views; no bench design's pad, nor the photos', was lost).
     if excused and reference.painted_marks and not (sure or framed() or pattern()):
         return "unframed"
-    samples = stroke_samples(reference.corners_m, hit.fit.H, reference.is_paint)
-    if cut_through(image, reference.projection.weights, samples):
+    return paint_verdict(image, reference, hit.fit.H)
+
+
+def paint_verdict(image: np.ndarray, reference: Reference, H: np.ndarray) -> str:
+    """Whether the H that ``H`` (pad metres -> pixels of the view ``image``) puts in
+    view is painted as an H is (`pipeline.strokes`): "broken" when a stroke is cut
+    through, "unlike" when its notches are painted, else ""."""
+    weights = reference.projection.weights
+    samples = stroke_samples(reference.corners_m, H, reference.is_paint)
+    if cut_through(image, weights, samples):
         return "broken"
+    if notch_fill(image, weights, reference.notches, H) > MAX_NOTCH_FILL:
+        return "unlike"
     return ""
 
 

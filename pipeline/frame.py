@@ -36,7 +36,14 @@ import numpy as np
 from pipeline.board_search import MIN_BOARD_SUPPORT, find_boards
 from pipeline.camera import Camera
 from pipeline.candidates import MIN_EVIDENCE, fit_h_sides
-from pipeline.find import FIRST_LOOK_MIN_SPAN_PX, CandidateVerifier, Stages, Tally, search
+from pipeline.find import (
+    FIRST_LOOK_MIN_SPAN_PX,
+    CandidateVerifier,
+    Stages,
+    Tally,
+    paint_verdict,
+    search,
+)
 from pipeline.homography_fit import apply_h, span_of
 from pipeline.jit import compiled_ieee, plain
 from pipeline.measure import MEASURE_SPAN_PX, Measured, measure, pad_box_m
@@ -487,17 +494,22 @@ def _fitted_finely(
     """An H found on a coarse view (``found_scale``), its sides fitted again at the
     measurement's scale, as the working view's H's are found: its homography (frame
     pixels) and the window with its smoothed channel, or None when they are not found
-    there. (Measured from the coarse corners, which are a frame pixel or two off,
-    the real-world mix's poses came up to a tenth worse.)"""
+    there, or not painted as an H there (`pipeline.find.paint_verdict`). (Measured
+    from the coarse corners, which are a frame pixel or two off, the real-world mix's
+    poses came up to a tenth worse; a look-alike's gap of a frame pixel or two, merged
+    away on the coarse view, shows here: a broken H on the design bench's floor.)"""
     span = _pad_span_px(H, reference)
     view = _window(image, H, reference, MEASURE_SPAN_PX / span) if span >= 1.0 else None
     if view is None:
         return None
-    levels = smooth_channel(view.image(image), reference.projection)
+    picture = view.image(image)
+    levels = smooth_channel(picture, reference.projection)
     # (a coarse pixel's error, in the window's pixels)
     reach = max(2.5, 1.5 * view.scale / found_scale)
     fitted = fit_h_sides(levels, reference, view.matrix @ H, search_px=reach)
     if fitted is None:
+        return None
+    if paint_verdict(picture, reference, fitted[0].H):
         return None
     return view.to_frame @ fitted[0].H, (view, levels)
 

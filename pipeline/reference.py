@@ -28,6 +28,7 @@ from pipeline.preprocess import (
     tophat_rise,
 )
 from pipeline.shape_match import ShapeMatcher
+from pipeline.strokes import Notches, notches
 from pipeline.template import reference_pyramid
 
 H_CORNERS = 12
@@ -200,6 +201,11 @@ class Reference:
     def pose_points_m(self) -> np.ndarray:
         """The pad's points a pose is fitted to: the H's corners and the marks' vertices."""
         return np.vstack([self.corners_m, *(m.corners_m for m in self.marks)])
+
+    @cached_property
+    def notches(self) -> Notches:
+        """Where a located H's notches are read (`pipeline.strokes.notch_fill`)."""
+        return notches(self.corners_m, self.is_paint)
 
     def is_paint(self, points_m: np.ndarray) -> np.ndarray:
         """Whether the reference picture shows the H's paint (the H or a mark of its

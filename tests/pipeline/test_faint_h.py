@@ -75,6 +75,8 @@ def test_a_faint_speck_with_half_a_rim_around_it_is_no_pad(
     # (what half a rim said, the pad measured at the frame's own resolution: the
     # printed marker's two specks, measured enlarged, pose on too few pad edges too)
     monkeypatch.setattr(pipeline.measure, "ENLARGED_BELOW_PX", 0.0)
+    # (its notches read painted too: that check off, to show this one's part)
+    monkeypatch.setattr(pipeline.find, "MAX_NOTCH_FILL", float("inf"))
     assert photo_detected(image, reference)
 
 
@@ -88,6 +90,8 @@ def test_a_faint_speck_whose_pose_finds_no_pad_edges_is_no_pad(monkeypatch) -> N
     monkeypatch.setattr(pipeline.frame, "MIN_BOARD_SUPPORT", 0.0)
     # (nor does its pose fit its own points within a tenth of its span)
     monkeypatch.setattr(pipeline.measure, "MAX_UNPOSED", float("inf"))
+    # (its notches read painted too: that check off, to show this one's part)
+    monkeypatch.setattr(pipeline.find, "MAX_NOTCH_FILL", float("inf"))
     assert photo_detected(image, "refs/default_pad.png")
 
 

@@ -2,7 +2,14 @@ import numpy as np
 
 from pipeline.homography_fit import apply_h
 from pipeline.render import PadGeometry
-from pipeline.strokes import cut_through, deepest_dip, stroke_samples
+from pipeline.strokes import (
+    MAX_NOTCH_FILL,
+    cut_through,
+    deepest_dip,
+    notch_fill,
+    notches,
+    stroke_samples,
+)
 from tests.pipeline.bench_support import score_bench_frames
 
 H_M = PadGeometry().h_corners_m
@@ -74,3 +81,62 @@ def test_a_window_a_read_only_frame_and_a_gray_one_read_the_strokes_alike():
     three = np.dstack([gray] * 3)
     samples = stroke_samples(H_M, A, _not_paint)
     assert abs(deepest_dip(gray, weights, samples) - deepest_dip(three, weights, samples)) < 1e-9
+
+
+def _h_paint(pts):
+    """The H's paint as a reference shows it: inside its 12-corner outline."""
+    import cv2
+
+    outline = H_M.astype(np.float32).reshape(-1, 1, 2)
+    return np.array(
+        [cv2.pointPolygonTest(outline, (float(x), float(y)), False) >= 0 for x, y in pts]
+    )
+
+
+def _bar_cut_by_a_leg() -> np.ndarray:
+    """The H with a gap cut through its crossbar next to the left leg."""
+    img = _draw(False)
+    px = apply_h(A, H_M)  # corners 2 and 9: the crossbar's inner corners on the left
+    x_in, y_top, y_bot = int(px[2, 0]), int(px[2, 1]), int(px[9, 1])
+    img[y_top - 3 : y_bot + 3, x_in + 1 : x_in + 7] = 30
+    return img
+
+
+def test_a_gap_cut_through_the_crossbar_next_to_a_leg_is_a_cut():
+    # A broken H of the design bench's floor, its gap next to a leg, passed for a bold
+    # H: the crossbar's points stopped a quarter of its length short of the legs.
+    weights = np.array([0.114, 0.587, 0.299])
+    samples = stroke_samples(H_M, A, _h_paint)
+    assert not cut_through(_draw(False), weights, samples)
+    assert cut_through(_bar_cut_by_a_leg(), weights, samples)
+
+
+def _notched(fill: bool, shadow_x: int | None = None) -> np.ndarray:
+    """The H, its lower notch's half next to the crossbar painted over (a letter M's V
+    under a crossbar fitted at its point); with a shadow's edge at ``shadow_x``."""
+    import cv2
+
+    img = np.full((480, 640, 3), 30, np.uint8)
+    cv2.fillPoly(img, [np.round(apply_h(A, H_M)).astype(np.int32)], (230, 230, 230))
+    px = apply_h(A, H_M)  # corners 8, 9: the crossbar's lower inner corners; 7: a leg's end
+    if fill:
+        depth = int(0.5 * (px[7, 1] - px[8, 1]))
+        img[int(px[8, 1]) : int(px[8, 1]) + depth, int(px[9, 0]) : int(px[8, 0])] = 230
+    out = cv2.GaussianBlur(img, (5, 5), 1.0).astype(np.float32)
+    if shadow_x is not None:
+        out[:, shadow_x:] *= 0.45
+    return out.astype(np.uint8)
+
+
+def test_notches_painted_over_are_no_h_s():
+    weights = np.array([0.114, 0.587, 0.299])
+    where = notches(H_M, _h_paint)
+    # The H's bare notches read as its board wherever a shadow's edge falls (the H
+    # spans x 224-416, its notches' middle x 320)...
+    for shadow_x in (None, 200, 260, 320, 380, 440):
+        assert notch_fill(_notched(False, shadow_x), weights, where, A) < 0.1, shadow_x
+    # ... and painted over, as paint, where no shadow's edge falls between a leg and
+    # the notch's middle.
+    for shadow_x in (None, 200, 440):
+        filled = notch_fill(_notched(True, shadow_x), weights, where, A)
+        assert filled > MAX_NOTCH_FILL, shadow_x
