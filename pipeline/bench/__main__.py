@@ -44,7 +44,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--vector",
         action="store_true",
-        help="the pose on frames drawn another way: the pad as vector polygons (1-6 m)",
+        help="the pose on frames drawn another way (1-6 m): the default pad as vector "
+        "polygons, another --design's picture warped by OpenCV",
     )
     parser.add_argument(
         "--photos",
@@ -87,7 +88,15 @@ def _dispatch(args: argparse.Namespace, methods: list[str]) -> dict:
     if args.vector:
         from pipeline.bench.vector import run_vector
 
-        return run_vector(frames=args.frames or 150, seed=args.seed)
+        frames = args.frames or 150
+        if args.design is None:
+            return run_vector(frames=frames, seed=args.seed)
+        return {
+            "designs": {
+                name: run_vector(frames=frames, seed=args.seed, design=name)
+                for name in accuracy.design_names(args.design)
+            }
+        }
     if args.track:
         from pipeline.bench.track import run_track
 
