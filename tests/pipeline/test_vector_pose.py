@@ -1,5 +1,6 @@
-"""The pose on frames drawn from the pad's geometry alone (`pipeline.bench.vector`),
-not by the renderer the reference's picture shares its conventions with."""
+"""The pose on frames drawn another way (`pipeline.bench.vector`): from the pad's
+geometry alone, or its picture warped by OpenCV; not by the renderer the reference's
+picture shares its conventions with."""
 
 from __future__ import annotations
 
