@@ -159,6 +159,7 @@ def run_vector(frames: int, seed: int, design: str = "default") -> dict:
         reference = Reference.from_image(pad.draw().image, pad.size_m)
     altitude = altitude_for(pad)
     out: dict = {"design": design, "renderer": RENDERER if design == "default" else WARPED}
+    draw = draw_pad if design == "default" else functools.partial(warp_picture, design=pad)
     for level, (snr_db, blur_px) in NOISE_LEVELS.items():
         hinted, exact, unhinted = Tally(), Tally(), Tally()
         ambiguous = silent_wrong = 0
@@ -168,7 +169,6 @@ def run_vector(frames: int, seed: int, design: str = "default") -> dict:
                 rng, camera, altitude=altitude, pad_size_m=pad.size_m, snr_db=None,
                 max_blur_px=0.0, lighting=False,
             )  # fmt: skip
-            draw = draw_pad if design == "default" else functools.partial(warp_picture, design=pad)
             frame = draw(
                 camera, position_m=view.position_m, R_pad_cam=view.R_pad_cam, snr_db=snr_db,
                 blur_px=blur_px, rng=rng,
