@@ -92,6 +92,10 @@ MAX_LEVEL_BENT = 0.03
 # on a carpet's noise (neg_111, seed 9, closer look), at 18 %.
 MAX_UNPOSED = 0.1
 WIDE_SEARCH_PX = 6.0  # how far the whole pad's edges are first looked for
+# Without the attitude, a pose the pad's edges read otherwise, tilted this much apart, is
+# ambiguous (`_read_otherwise`); fitted again from the marks' way round, so far and often.
+OTHERWISE_DEG = 1.5
+AGAIN_SEARCH_PX, AGAIN_STEPS = 1.5, 2
 SELF_SUFFICIENT_PX = 100.0  # an H this large pins the pose by itself
 MIN_MARKS_FOUND = 0.5  # of the marks' resolvable sides, for the whole pad to count
 # Fewer sides seen than this: their share is weighed by their lengths (a closer look's
@@ -216,8 +220,64 @@ def measure(
                 edge_support(levels, reference.h_edges, cam, fit.rvec, fit.tvec) < MIN_EDGES_FOUND
             ):
                 continue
+            if gravity is None and with_marks and not ambiguous:
+                ambiguous = _read_otherwise(reference, levels, cam, Hv, start, Hs, fit, view)
             return Measured(view.to_frame @ H_try, fit, support, ambiguous, told, lean)
     return None
+
+
+def _read_otherwise(
+    reference: Reference,
+    levels: np.ndarray,
+    cam: Camera,
+    Hv: np.ndarray,
+    start: np.ndarray,
+    Hs: np.ndarray,
+    fit: EdgeFit,
+    view: View,
+) -> bool:
+    """Whether the pad's edges, fitted another way, tilt a pose without the attitude
+    over ``OTHERWISE_DEG`` from ``fit`` (posed from ``Hs``: the whole pad fitted from
+    the H's homography ``Hv`` as ``start``, then turned as its marks tell): without the
+    strokes so thin that a blur may make one line of them, and, where the marks turned
+    the pad about, fitted again from their way round.
+
+    A blurred line's flanks lie further out than its sides, and a stroke that thin is
+    fitted only where its sides come a pixel apart (on one side of it, or one part);
+    fitted the wrong way round, a heading mark's sides find what lies where it is not.
+    On frames rendered apart from this project at 20 dB, a paper sheet's printed ring
+    of about a pixel and its triangle so pulled the sheet's corners 1-1.9 px off, and 4
+    of 150 poses without the attitude came 3.2-6 degrees off, their tilt thought pinned
+    to 0.7 degrees; fitted the other ways, 0.3-1.8. Neither way is better everywhere
+    (on the bench's own frames, fitted without the thin strokes, serif_octagon's and
+    paper_ring's unflagged poses came up to 2.5-2.9 degrees off, not 1.2-1.4): where
+    the two part, the pixels do not tell the tilt."""
+    others = []
+    if _thin_strokes(Hv, reference):
+        thin = _fit_whole_pad(levels, reference, Hv, BLURRED_STROKE_PX, False)
+        span = span_of(apply_h(Hv, reference.corners_m))
+        if (
+            thin is not None
+            and _marks_found(thin, reference) >= MIN_MARKS_FOUND
+            and _in_place(thin.H, Hv, reference, span)
+        ):
+            others.append(_heading(thin.H, reference, levels)[0])
+    if Hs is not start:
+        again = fit_homography(
+            levels,
+            reference.edge_model,
+            Hs,
+            iterations=AGAIN_STEPS,
+            search_px=AGAIN_SEARCH_PX,
+            sides_alike=False,
+        )
+        if again is not None:
+            others.append(again.H)
+    for H in others:
+        other = _pose_of(reference, levels, cam, H, True, None, view)
+        if other is not None and _angle_deg(other[0].rvec, fit.rvec) > OTHERWISE_DEG:
+            return True
+    return False
 
 
 def _along_grid(H: np.ndarray, reference: Reference) -> bool:
@@ -626,10 +686,15 @@ def _tie(a, b) -> bool:
 
 def _apart(a, b) -> bool:
     """Whether two (rms, tilt, rvec, tvec) poses differ by more than a degree."""
-    Ra, _ = cv2.Rodrigues(a[2])
-    Rb, _ = cv2.Rodrigues(b[2])
+    return _angle_deg(a[2], b[2]) > 1.0
+
+
+def _angle_deg(rvec_a: np.ndarray, rvec_b: np.ndarray) -> float:
+    """The angle between two rotations (Rodrigues vectors), degrees."""
+    Ra, _ = cv2.Rodrigues(rvec_a)
+    Rb, _ = cv2.Rodrigues(rvec_b)
     c = (np.trace(Ra.T @ Rb) - 1.0) / 2.0
-    return bool(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))) > 1.0)
+    return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
 
 
 def _better(a, b) -> bool:
