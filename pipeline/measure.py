@@ -37,6 +37,7 @@ from pipeline.pose import (
     ippe_candidates,
     lean_rotation,
     refine_with_gravity,
+    rotation_angle_deg,
     tilt_deg,
     tilt_from_level_deg,
 )
@@ -691,10 +692,7 @@ def _apart(a, b) -> bool:
 
 def _angle_deg(rvec_a: np.ndarray, rvec_b: np.ndarray) -> float:
     """The angle between two rotations (Rodrigues vectors), degrees."""
-    Ra, _ = cv2.Rodrigues(rvec_a)
-    Rb, _ = cv2.Rodrigues(rvec_b)
-    c = (np.trace(Ra.T @ Rb) - 1.0) / 2.0
-    return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
+    return rotation_angle_deg(cv2.Rodrigues(rvec_a)[0], cv2.Rodrigues(rvec_b)[0])
 
 
 def _better(a, b) -> bool:

@@ -48,6 +48,12 @@ def ippe_candidates(
     return [(r.copy(), t.copy()) for r, t in zip(rvecs, tvecs, strict=True) if t[2, 0] > 0]
 
 
+def rotation_angle_deg(Ra: np.ndarray, Rb: np.ndarray) -> float:
+    """The angle between two rotation matrices, degrees."""
+    c = (np.trace(Ra.T @ Rb) - 1.0) / 2.0
+    return math.degrees(math.acos(float(np.clip(c, -1.0, 1.0))))
+
+
 def tilt_deg(rvec: np.ndarray) -> float:
     """Angle between the camera's optical axis and straight down onto the pad."""
     # The pad's +z in camera coordinates is R_cam_pad[:, 2]; looking down, the

@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from pipeline.pose import TURN
+from pipeline.pose import TURN, rotation_angle_deg
 from pipeline.render import View
 from pipeline.result import Pose
 
@@ -85,8 +83,3 @@ def stats(values: list[float]) -> dict:
 
 def ratio(a: float | None, b: float | None) -> float | None:
     return None if not a or not b else float(a / b)
-
-
-def rotation_angle_deg(Ra: np.ndarray, Rb: np.ndarray) -> float:
-    c = (np.trace(Ra.T @ Rb) - 1.0) / 2.0
-    return math.degrees(math.acos(float(np.clip(c, -1.0, 1.0))))
