@@ -4,10 +4,15 @@ Contour pixels sit on the integer grid and their position depends on the
 threshold; corners found on them are off by up to a pixel, which at a 25 px
 wide H is several percent of range. Here each polygon side is re-measured on
 the smoothed gray image: profiles across the side locate the edge at the
-strongest bright-to-dark gradient (parabolic peak), a line is fitted through
-those edge points, and the corners become the intersections of neighbouring
-lines. The result does not depend on the threshold and is good to a few
-hundredths of a pixel on clean edges.
+centroid of the bright-to-dark drops around the steepest, a line is fitted
+through those edge points, and the corners become the intersections of
+neighbouring lines. The result does not depend on the threshold and is good to
+a few hundredths of a pixel on clean edges.
+
+A reference picture is drawn square to its pixels, so every side of its H lies
+along a row or a column, where a parabola through the steepest drops locks to
+the pixel grid (`pipeline.edge_kernels.edge_offsets`): up to 0.39 px off by the
+edge's phase alone, the same all along the side.
 """
 
 from __future__ import annotations
@@ -15,7 +20,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-_OFFSETS = np.arange(-3.0, 3.01, 0.5, dtype=np.float32)
+from pipeline.edge_kernels import MAX_TAIL, MIN_DROP, STEP_PX, TAIL_SHARE, WEIGHT_FLOOR
 
 
 def signed_area(poly: np.ndarray) -> float:
@@ -63,8 +68,9 @@ def refine_polygon(
         raise ValueError(f"corners must hold at least 3 points, got {n}")
     orient = 1.0 if signed_area(corners) > 0 else -1.0
     sign = 1.0 if bright_inside else -1.0
-    offsets = _OFFSETS[np.abs(_OFFSETS) <= search_px + 1e-6].astype(np.float64)
-    step = float(offsets[1] - offsets[0])
+    # Sampled beyond the search by the drops' tails (the steepest is looked for within it).
+    half = int(np.floor(search_px / STEP_PX + 1e-6))
+    offsets = STEP_PX * np.arange(-half - MAX_TAIL, half + MAX_TAIL + 1, dtype=np.float64)
 
     a = corners
     d = np.roll(corners, -1, axis=0) - a
@@ -99,16 +105,13 @@ def refine_polygon(
     )
     # Derivative along the outward normal, signed so the edge is a positive peak.
     grad = -sign * np.diff(samples, axis=1)
-    k = np.argmax(grad, axis=1)
-    rows = np.arange(len(side))
-    peak = grad[rows, k]
-    ok = (k > 0) & (k < grad.shape[1] - 1) & (peak > 4.0)
-    kk = np.clip(k, 1, grad.shape[1] - 2)
-    g0, g1, g2 = grad[rows, kk - 1], grad[rows, kk], grad[rows, kk + 1]
-    den = g0 - 2 * g1 + g2
-    sub = np.where(np.abs(den) > 1e-9, 0.5 * (g0 - g2) / np.where(den == 0, 1.0, den), 0.0)
+    searched = grad[:, MAX_TAIL : grad.shape[1] - MAX_TAIL]
+    k = np.argmax(searched, axis=1)
+    peak = searched[np.arange(len(side)), k]
+    ok = (k > 0) & (k < searched.shape[1] - 1) & (peak > MIN_DROP)
+    at = _drops_centroid(grad, k + MAX_TAIL, peak)
     # The difference of samples j and j+1 sits half-way between them.
-    off = offsets[0] + (kk + 0.5 + np.clip(sub, -0.5, 0.5)) * step
+    off = offsets[0] + (at + 0.5) * STEP_PX
     edge = base + off[:, None] * normal[side]
 
     lines = _fit_lines(edge, side, ok, n, measurable)
@@ -129,6 +132,29 @@ def refine_polygon(
     if np.max(np.hypot(*(out - corners).T)) > search_px + 1.5:
         return None
     return out, rms
+
+
+def _drops_centroid(drops: np.ndarray, best: np.ndarray, peak: np.ndarray) -> np.ndarray:
+    """Per row of ``drops``, where (in its indices) the centroid of the drops around
+    ``best`` (the steepest, ``peak``) lies, as `pipeline.edge_kernels` places a pose's
+    edges: the drops over ``WEIGHT_FLOOR`` of the steepest weigh by their excess, out to
+    where they fall to ``TAIL_SHARE`` of it, ``MAX_TAIL`` at most each side; taken
+    twice, the second time around the first's centroid."""
+    index = np.arange(drops.shape[1])[None, :]
+    tail = drops <= TAIL_SHARE * peak[:, None]
+    centre = best
+    at = best.astype(np.float64)
+    for _ in range(2):
+        c = centre[:, None]
+        first = np.where(tail & (index < c), index, -1).max(axis=1) + 1
+        last = np.where(tail & (index > c), index, drops.shape[1]).min(axis=1) - 1
+        first, last = np.maximum(first, centre - MAX_TAIL), np.minimum(last, centre + MAX_TAIL)
+        inside = (index >= first[:, None]) & (index <= last[:, None])
+        weight = np.where(inside, np.maximum(drops - WEIGHT_FLOOR * peak[:, None], 0.0), 0.0)
+        mass = weight.sum(axis=1)
+        at = np.where(mass > 0.0, (weight * index).sum(axis=1) / np.maximum(mass, 1e-12), at)
+        centre = np.clip(np.rint(at).astype(int), 0, drops.shape[1] - 1)
+    return at
 
 
 def _fit_lines(edge: np.ndarray, side: np.ndarray, ok: np.ndarray, n: int, measured: np.ndarray):

@@ -25,6 +25,16 @@ def test_refines_corners_to_a_tenth_of_a_pixel():
     assert rms < 0.3
 
 
+@pytest.mark.parametrize("phase", np.arange(0.0, 1.0, 0.125))
+def test_sides_along_the_pixel_grid_are_placed_at_any_phase(phase):
+    # (a reference picture's H: every side along a row or a column, where a parabola
+    # through the steepest drops locked to the grid, up to 0.5 px off)
+    rect = np.array([[60.0, 70.0], [140.0, 70.0], [140.0, 130.0], [60.0, 130.0]])
+    rect += [phase, 0.5 * phase]
+    out, _ = refine_polygon(cv2.GaussianBlur(_draw(rect), (5, 5), 1.0), np.round(rect))
+    assert np.max(np.abs(out - rect)) < 0.15
+
+
 def test_refinement_survives_noise():
     rng = np.random.default_rng(1)
     noisy = np.clip(_draw(QUAD) + rng.normal(0, 20, (200, 200)), 0, 255).astype(np.uint8)

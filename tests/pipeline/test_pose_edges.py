@@ -34,6 +34,6 @@ def test_an_h_of_other_strokes_on_grass_is_no_pad(i, monkeypatch) -> None:
 @needs_photos
 def test_a_pad_unlike_its_drawn_reference_is_still_found() -> None:
     # A degraded view of a real paper pad, its reference a drawing of the design: its
-    # pose finds 1 % of the pad's edges (the drawing's ring and triangle are not the
-    # print's), and 16 % of its H's.
-    assert photo_detected(photo_view("pos_082", 1, 2), "refs/dark_H_ring_synth.png")
+    # pose finds 3.5 % of the pad's edges (the drawing's ring and triangle are not the
+    # print's), and 61 % of its H's.
+    assert photo_detected(photo_view("pos_082", 1, 1), "refs/dark_H_ring_synth.png")

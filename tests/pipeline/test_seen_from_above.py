@@ -8,7 +8,9 @@ edge; measured, it gave a "detection" with the camera 0.9 m under the ground. A
 far pad's H (4 px) fitted astray on a floor passed as seen, and its pose put the
 camera 2 cm under the ground looking up (68 px off its own points). Without the
 attitude, an H squashed to a sliver on a carpet's noise was posed 18 % of its span
-off its own points: no plane this camera sees (``measure.MAX_UNPOSED``).
+off its own points: no plane this camera sees (``measure.MAX_UNPOSED``; since the
+reference's corners are placed off the pixel grid that photo's view no longer reaches
+the check: `tests.pipeline.test_faint_h` shows its part on another).
 """
 
 from __future__ import annotations
@@ -16,8 +18,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import pipeline.find
-import pipeline.measure
 from pipeline.homography_fit import MAX_DEPTH_RATIO, seen_from_above
 from pipeline.measure import measure
 from pipeline.pose import camera_height_m, pose_to_vectors
@@ -26,9 +26,6 @@ from pipeline.result import Pose
 from tests.pipeline.bench_support import (
     CAM,
     bench_frames,
-    needs_photos,
-    photo_detected,
-    photo_view,
     true_homography,
 )
 
@@ -58,20 +55,6 @@ def test_an_h_across_its_vanishing_line_or_stretched_into_the_distance_is_not_se
     folded = view @ np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 2.0, 1.0]])
     assert not seen_from_above(folded, corners)
     assert not seen_from_above(np.zeros((3, 3)), corners)
-
-
-@needs_photos
-@pytest.mark.slow
-def test_a_homography_no_pose_fits_is_no_pad_without_the_attitude(monkeypatch):
-    # The photos bench's negative neg_111 (carpet) at seed 9, with the orange ring's
-    # reference: a closer look's H, its corners squashed to a sliver 12 px wide and
-    # 137 px tall, posed 24.5 px off them.
-    image = photo_view("neg_111", 9, 2)
-    assert not photo_detected(image, "refs/orange_ring_synth.png")
-    monkeypatch.setattr(pipeline.measure, "MAX_UNPOSED", np.inf)
-    # (its notches read painted too: that check off, to show this one's part)
-    monkeypatch.setattr(pipeline.find, "MAX_NOTCH_FILL", float("inf"))
-    assert photo_detected(image, "refs/orange_ring_synth.png")
 
 
 @pytest.mark.parametrize("height", [3.0, 0.2, -0.02, -3.0])
