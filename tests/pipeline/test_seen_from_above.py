@@ -10,7 +10,9 @@ camera 2 cm under the ground looking up (68 px off its own points). Without the
 attitude, an H squashed to a sliver on a carpet's noise was posed 18 % of its span
 off its own points: no plane this camera sees (``measure.MAX_UNPOSED``; since the
 reference's corners are placed off the pixel grid that photo's view no longer reaches
-the check: `tests.pipeline.test_faint_h` shows its part on another).
+the check: `tests.pipeline.test_faint_h` shows its part on another). Another sliver
+there fitted its points within 5 % of its span, posed 86 degrees off the pad's normal
+(``measure.MAX_VIEW_DEG``): no camera over a pad sees it so.
 """
 
 from __future__ import annotations
@@ -18,14 +20,18 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import pipeline.measure
 from pipeline.homography_fit import MAX_DEPTH_RATIO, seen_from_above
-from pipeline.measure import measure
+from pipeline.measure import MAX_VIEW_DEG, _seen_from_deg, measure
 from pipeline.pose import camera_height_m, pose_to_vectors
 from pipeline.render import camera_rotation
 from pipeline.result import Pose
 from tests.pipeline.bench_support import (
     CAM,
     bench_frames,
+    needs_photos,
+    photo_detected,
+    photo_view,
     true_homography,
 )
 
@@ -65,3 +71,27 @@ def test_the_cameras_height_over_the_pad_is_told_from_its_pose(height):
         R_pad_cam = np.diag([1.0, -1.0, -1.0]) @ R_pad_cam  # (looking up at the pad's plane)
     pose = Pose(np.array([0.4, -0.3, height]), R_pad_cam, 0.1, False)
     assert camera_height_m(*pose_to_vectors(pose)) == pytest.approx(height)
+
+
+@pytest.mark.parametrize("off_deg", [0.0, 35.0, 74.0, 86.0])
+def test_the_angle_a_pad_is_seen_from_is_told_from_its_pose(off_deg):
+    """The camera 3 m from the pad's centre, ``off_deg`` from its normal, whatever it
+    looks at; past MAX_VIEW_DEG no camera over a pad sees it so."""
+    a = np.radians(off_deg)
+    position = 3.0 * np.array([np.sin(a) * 0.6, np.sin(a) * 0.8, np.cos(a)])
+    R_pad_cam = camera_rotation(30.0, tilt_deg=20.0, tilt_dir_deg=45.0)
+    pose = Pose(position, R_pad_cam, 0.1, False)
+    assert _seen_from_deg(*pose_to_vectors(pose)) == pytest.approx(off_deg, abs=1e-6)
+    assert (off_deg > MAX_VIEW_DEG) is (off_deg == 86.0)
+
+
+@needs_photos
+@pytest.mark.slow
+def test_an_h_squashed_to_a_sliver_seen_from_the_pads_side_is_no_pad(monkeypatch):
+    # The photos bench's negative neg_111 (carpet), seed 7, view 2: with the inverted
+    # dark block H's reference, a sliver of 5 x 43 px by the photo's rotated border was
+    # posed with the camera 0.6 m up and 9 m aside, 86 degrees off the pad's normal.
+    image = photo_view("neg_111", 7, 2)
+    assert not photo_detected(image, "refs/dark_block_H_synth_inverted.png")
+    monkeypatch.setattr(pipeline.measure, "MAX_VIEW_DEG", 90.0)
+    assert photo_detected(image, "refs/dark_block_H_synth_inverted.png")
