@@ -36,7 +36,6 @@ from pipeline.pose import (
     half_turn,
     ippe_candidates,
     lean_rotation,
-    pad_normal_in_camera,
     refine_with_gravity,
     rotation_angle_deg,
     tilt_deg,
@@ -671,9 +670,10 @@ def _fit_pose(
 
 
 def _seen_from_deg(rvec: np.ndarray, tvec: np.ndarray) -> float:
-    """The angle between the pad's normal and the line from the camera to its centre."""
+    """The angle between the pad's normal and the line from the camera to its centre:
+    the camera's height over the pad's plane against its distance."""
     t = np.asarray(tvec, np.float64).reshape(3)
-    cos = abs(float(pad_normal_in_camera(rvec) @ t)) / max(math.sqrt(float(t @ t)), 1e-12)
+    cos = abs(camera_height_m(rvec, t)) / max(math.sqrt(float(t @ t)), 1e-12)
     return math.degrees(math.acos(min(cos, 1.0)))
 
 
