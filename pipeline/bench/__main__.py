@@ -1,4 +1,4 @@
-"""``python -m pipeline.bench [--design NAME|all] [--sweep KIND] [--report DIR] ...``."""
+"""``python -m pipeline.bench [--design NAME|all | --picture FILE --size M] [--sweep KIND] ...``."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import sys
 
 from pipeline.bench import accuracy
 from pipeline.bench.frames import DEGRADE_LEVELS
+from pipeline.bench.picture_design import PictureDesign, picture_design
 from pipeline.preprocess import DEFAULT_METHOD, METHODS
 
 SWEEPS = ("altitude", "snr", "tilt", "yaw")
@@ -23,6 +24,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--methods", default=",".join(METHODS), help="thresholdings to compare")
     parser.add_argument("--design", help="a design name, comma-separated names, or 'all'")
+    parser.add_argument(
+        "--picture",
+        metavar="FILE",
+        help="your own pad instead of a design: its top-down picture (as the station's "
+        "reference), laid on the bench's floors; with --size, and --sweep if you like",
+    )
+    parser.add_argument("--size", type=float, metavar="M", help="--picture: the pad's width, m")
     parser.add_argument("--degrade", choices=DEGRADE_LEVELS, default="today")
     parser.add_argument("--sweep", choices=SWEEPS)
     parser.add_argument(
@@ -72,6 +80,15 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--methods must include {DEFAULT_METHOD}")
     if args.sweep and args.report:
         parser.error("--sweep and --report are separate runs")
+    if args.picture is not None:
+        if args.size is None:
+            parser.error("--picture needs --size: the pad's width in metres")
+        if args.design is not None:
+            parser.error("--picture and --design are separate runs")
+        if args.photos or args.track or args.report:
+            parser.error("--picture goes with the design bench, --sweep or --vector")
+    elif args.size is not None:
+        parser.error("--size goes with --picture")
     try:
         out = _dispatch(args, methods)
     except ValueError as exc:
@@ -85,10 +102,13 @@ def _dispatch(args: argparse.Namespace, methods: list[str]) -> dict:
         from pipeline.bench.photos import run_photos
 
         return run_photos(args.photos, augment=args.augment, seed=args.seed)
+    design = picture_design(args.picture, args.size) if args.picture else args.design
     if args.vector:
         from pipeline.bench.vector import run_vector
 
         frames = args.frames or 150
+        if isinstance(design, PictureDesign):
+            return {"designs": {design.name: run_vector(frames, args.seed, design=design)}}
         if args.design is None:
             return run_vector(frames=frames, seed=args.seed)
         return {
@@ -117,16 +137,20 @@ def _dispatch(args: argparse.Namespace, methods: list[str]) -> dict:
             resolutions=[tuple(int(v) for v in r.split("x")) for r in resolutions],
             frames=args.frames or 20,
             seed=args.seed,
-            design=args.design or "default",
+            design=design or "default",
             degrade=args.degrade,
             method=DEFAULT_METHOD if DEFAULT_METHOD in methods else methods[0],
             plot_dir=args.plot,
             hint=args.hint,
         )
     frames = args.frames or 200
-    if args.design is None:
+    if isinstance(design, PictureDesign):
+        return accuracy.run_designs(
+            [design], frames, args.seed, methods, degrade=args.degrade, hint=args.hint
+        )
+    if design is None:
         return accuracy.run(frames, args.seed, methods, degrade=args.degrade, hint=args.hint)
-    names = accuracy.design_names(args.design)
+    names = accuracy.design_names(design)
     return accuracy.run_designs(
         names, frames, args.seed, methods, degrade=args.degrade, hint=args.hint
     )

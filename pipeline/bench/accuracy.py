@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -21,6 +22,7 @@ from pipeline import Camera, Reference, process_frame
 from pipeline.bench.frames import SCENE_EVERY, altitude_for, make_scenes, make_view
 from pipeline.bench.hint import NOISE_DEG, gravity_hint
 from pipeline.bench.markers import ArucoDetector
+from pipeline.bench.picture_design import PadDesign, design_of
 from pipeline.bench.tally import Tally, ratio, stats
 from pipeline.cores import use_one_core
 from pipeline.preprocess import DEFAULT_METHOD
@@ -33,13 +35,14 @@ def run(
     seed: int,
     methods: list[str],
     *,
-    design: str = "default",
+    design: str | PadDesign = "default",
     degrade: str = "today",
     hint: bool = False,
 ) -> dict:
-    """One design's figures (the bench's keys since the start, plus the design's)."""
+    """One design's figures (the bench's keys since the start, plus the design's):
+    a registered design's name, or a design such as a picture's (`picture_design`)."""
     use_one_core()
-    d = get_design(design)
+    d = design_of(design)
     camera = Camera.from_fov(640, 480, 60.0)
     pic = d.draw()
     try:
@@ -109,7 +112,7 @@ def run(
 
 
 def run_designs(
-    names: list[str],
+    designs: Sequence[str | PadDesign],
     frames: int,
     seed: int,
     methods: list[str],
@@ -117,8 +120,11 @@ def run_designs(
     degrade: str = "today",
     hint: bool = False,
 ) -> dict:
-    """Every named design's figures and a summary over them."""
-    per = {n: run(frames, seed, methods, design=n, degrade=degrade, hint=hint) for n in names}
+    """Every design's figures (by its name) and a summary over them."""
+    per = {}
+    for design in designs:
+        d = design_of(design)
+        per[d.name] = run(frames, seed, methods, design=d, degrade=degrade, hint=hint)
     return {
         "designs": per,
         "summary": summarise(per),

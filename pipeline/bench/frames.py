@@ -15,8 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.bench.markers import marker_texture
+from pipeline.bench.picture_design import PadDesign
 from pipeline.camera import Camera
-from pipeline.render import PAD_SIZE_M, Design, Scene, View, make_scene, random_view
+from pipeline.render import PAD_SIZE_M, Scene, View, make_scene, random_view
 
 DEGRADE_LEVELS = ("clean", "today", "real")
 """``clean``: no noise, blur or lighting; ``today``: the bench's mix since the start
@@ -46,7 +47,7 @@ def floor_for(level: str) -> str:
 
 
 def altitude_for(
-    design: Design, base: tuple[float, float] = BASE_ALTITUDE_M
+    design: PadDesign, base: tuple[float, float] = BASE_ALTITUDE_M
 ) -> tuple[float, float]:
     """Altitudes at which ``design`` spans the pixels the 0.55 m pad spans at ``base``."""
     k = design.size_m / PAD_SIZE_M
@@ -66,7 +67,7 @@ def _marker(kind: str, size_m: float) -> tuple[np.ndarray, float]:
 
 
 def make_scenes(
-    design: Design, seed: list[int] | int, level: str, markers: tuple[str, ...]
+    design: PadDesign, seed: list[int] | int, level: str, markers: tuple[str, ...]
 ) -> Scenes:
     """The pad's scene, its empty twin and one scene per marker kind, from one seed."""
     scene_rng = np.random.default_rng(seed)
@@ -91,7 +92,7 @@ def make_scenes(
 
 
 def make_view(
-    seed: list[int], camera: Camera, design: Design, level: str, **overrides
+    seed: list[int], camera: Camera, design: PadDesign, level: str, **overrides
 ) -> tuple[View, int]:
     """A random view of ``design`` (see `view_options`) and the seed of its noise."""
     rng = np.random.default_rng(seed)

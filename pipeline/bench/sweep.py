@@ -35,11 +35,12 @@ from pipeline import Camera, Reference, process_frame
 from pipeline.bench.frames import SCENE_EVERY, Scenes, make_scenes, make_view
 from pipeline.bench.hint import NOISE_DEG, gravity_hint
 from pipeline.bench.markers import AprilTagDetector, ArucoDetector, settings
+from pipeline.bench.picture_design import PadDesign, design_of
 from pipeline.bench.plot import line_panel, save
 from pipeline.bench.tally import Tally
 from pipeline.cores import use_one_core
 from pipeline.preprocess import DEFAULT_METHOD
-from pipeline.render import PAD_SIZE_M, Design, get_design
+from pipeline.render import PAD_SIZE_M
 from pipeline.render.view import render_view
 
 DETECTORS = ("visland", "aruco", "apriltag")
@@ -54,7 +55,7 @@ _X_KEY = {"altitude": "altitude_m", "snr": "snr_db", "tilt": "tilt_deg", "yaw": 
 _POINTS = {"snr": SNR_POINTS_DB, "tilt": TILT_POINTS_DEG, "yaw": YAW_POINTS_DEG}
 
 
-def altitude_points(design: Design, camera: Camera) -> list[float]:
+def altitude_points(design: PadDesign, camera: Camera) -> list[float]:
     """1-10 m by 1, then by 2 to 20, then by 4, up to where the pad spans 12 px (0.55 m
     pad; other pads scaled by their size), that last altitude included."""
     k = design.size_m / PAD_SIZE_M
@@ -84,7 +85,7 @@ def run_sweep(
     resolutions: list[tuple[int, int]],
     frames: int = 20,
     seed: int = 0,
-    design: str = "default",
+    design: str | PadDesign = "default",
     degrade: str = "today",
     method: str = DEFAULT_METHOD,
     plot_dir: str | None = None,
@@ -97,7 +98,7 @@ def run_sweep(
     if frames <= 0:
         raise ValueError(f"frames must be positive, got {frames}")
     use_one_core()
-    d = get_design(design)
+    d = design_of(design)
     try:
         reference: Reference | None = Reference.from_image(d.draw().image, d.size_m)
         ref_error = None

@@ -26,10 +26,11 @@ import numpy as np
 from pipeline import Camera, Reference, process_frame
 from pipeline.bench.frames import altitude_for
 from pipeline.bench.hint import NOISE_DEG, gravity_hint
+from pipeline.bench.picture_design import PadDesign, design_of
 from pipeline.bench.tally import Tally
 from pipeline.cores import use_one_core
-from pipeline.render import BOARD_BGR, PAINT_BGR, PadGeometry, get_design, make_pad_image
-from pipeline.render.designs import Design, DesignPicture
+from pipeline.render import BOARD_BGR, PAINT_BGR, PadGeometry, make_pad_image
+from pipeline.render.designs import DesignPicture
 from pipeline.render.view import random_view
 
 SUPERSAMPLE = 8
@@ -88,7 +89,7 @@ def draw_pad(
 
 def warp_picture(
     camera: Camera,
-    design: Design,
+    design: PadDesign,
     position_m: np.ndarray,
     R_pad_cam: np.ndarray,
     *,
@@ -98,14 +99,15 @@ def warp_picture(
 ) -> np.ndarray:
     """``design``'s picture on a plain floor seen from ``position_m`` by a camera turned
     by ``R_pad_cam`` (as `draw_pad`), warped by OpenCV: a picture pixel's centre (u, v)
-    lies at ((u + 0.5) / n - 0.5, 0.5 - (v + 0.5) / n) times the pad's size, metres."""
+    lies at ((u + 0.5) / w - 0.5, (h / 2 - v - 0.5) / w) times the pad's size (its width,
+    w pixels; h high), metres."""
     drawn = _drawn(design)
-    n = drawn.image.shape[0]
-    size = design.size_m
+    h, w = drawn.image.shape[:2]
+    size = design.size_m  # (the picture's width; its height follows its aspect)
     to_m = np.array(
         [
-            [size / n, 0.0, size * (0.5 / n - 0.5)],
-            [0.0, -size / n, size * (0.5 - 0.5 / n)],
+            [size / w, 0.0, size * (0.5 / w - 0.5)],
+            [0.0, -size / w, size * (0.5 * h / w - 0.5 / w)],
             [0.0, 0.0, 1.0],
         ]
     )
@@ -115,7 +117,7 @@ def warp_picture(
     finer = np.array([[s, 0.0, 0.5 * s - 0.5], [0.0, s, 0.5 * s - 0.5], [0.0, 0.0, 1.0]])
     H = finer @ camera.K @ np.column_stack([R_cam_pad[:, 0], R_cam_pad[:, 1], t]) @ to_m
     fine = (camera.width * s, camera.height * s)
-    alpha = drawn.alpha if drawn.alpha is not None else np.full((n, n), 255, np.uint8)
+    alpha = drawn.alpha if drawn.alpha is not None else np.full((h, w), 255, np.uint8)
     paint = cv2.warpPerspective(drawn.image, H, fine, flags=cv2.INTER_LINEAR)
     cover = cv2.warpPerspective(alpha, H, fine, flags=cv2.INTER_LINEAR)[..., None] / 255.0
     big = paint * cover + np.array(FLOOR_BGR, np.float64) * (1.0 - cover)
@@ -123,7 +125,7 @@ def warp_picture(
 
 
 @functools.lru_cache(maxsize=4)
-def _drawn(design: Design) -> DesignPicture:
+def _drawn(design: PadDesign) -> DesignPicture:
     return design.draw()  # (half a second a picture: once per run)
 
 
@@ -146,20 +148,21 @@ def _finished(
     return np.clip(np.round(img), 0, 255).astype(np.uint8)
 
 
-def run_vector(frames: int, seed: int, design: str = "default") -> dict:
+def run_vector(frames: int, seed: int, design: str | PadDesign = "default") -> dict:
     """A design's pose at 640 x 480, on frames drawn another way: the default pad as
-    polygons, another design's picture warped (at the altitudes where it spans what
-    the default pad does at 1-6 m)."""
+    polygons, another design's picture (or a picture's, `picture_design`) warped (at
+    the altitudes where it spans what the default pad does at 1-6 m)."""
     use_one_core()
     camera = Camera.from_fov(640, 480, 60.0)
-    pad = get_design(design)
-    if design == "default":
+    pad = design_of(design)
+    polygons = design == "default"
+    if polygons:
         reference = Reference.from_image(make_pad_image(1100), PadGeometry().size_m)
     else:
         reference = Reference.from_image(pad.draw().image, pad.size_m)
     altitude = altitude_for(pad)
-    out: dict = {"design": design, "renderer": RENDERER if design == "default" else WARPED}
-    draw = draw_pad if design == "default" else functools.partial(warp_picture, design=pad)
+    out: dict = {"design": pad.name, "renderer": RENDERER if polygons else WARPED}
+    draw = draw_pad if polygons else functools.partial(warp_picture, design=pad)
     for level, (snr_db, blur_px) in NOISE_LEVELS.items():
         hinted, exact, unhinted = Tally(), Tally(), Tally()
         ambiguous = silent_wrong = 0
