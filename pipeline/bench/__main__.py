@@ -28,9 +28,11 @@ def main(argv: list[str] | None = None) -> int:
         "--picture",
         metavar="FILE",
         help="your own pad instead of a design: its top-down picture (as the station's "
-        "reference), laid on the bench's floors; with --size, and --sweep if you like",
+        "reference), laid on the bench's floors; with --size (--sweep, --vector take it too)",
     )
-    parser.add_argument("--size", type=float, metavar="M", help="--picture: the pad's width, m")
+    parser.add_argument(
+        "--size", type=float, metavar="M", help="--picture: its width, m (the pad's, cropped)"
+    )
     parser.add_argument("--degrade", choices=DEGRADE_LEVELS, default="today")
     parser.add_argument("--sweep", choices=SWEEPS)
     parser.add_argument(
