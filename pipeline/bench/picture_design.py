@@ -34,6 +34,7 @@ class PictureDesign:
     image: np.ndarray
     size_m: float
     h_corners_m: np.ndarray
+    h_size_m: float  # the H's extent (the larger of its width and height), metres
     h_bgr: tuple[float, float, float]
     symmetric: bool
     floors: tuple[str, ...] | None = None  # (any floor the bench lays pads on)
@@ -42,18 +43,9 @@ class PictureDesign:
     def description(self) -> str:
         return f"the pad of the picture {self.name} ({self.size_m:g} m wide)"
 
-    @property
-    def h_size_m(self) -> float:
-        """The H's extent (the larger of its width and height), metres."""
-        return float(np.ptp(self.h_corners_m, axis=0).max())
-
     def draw(self, size_px: int | None = None) -> DesignPicture:
         """The picture (``size_px`` wide, its aspect kept), as `Design.draw` draws a design."""
-        image = self.image
-        if size_px is not None:
-            h, w = image.shape[:2]
-            size = (int(size_px), max(1, round(size_px * h / w)))
-            image = cv2.resize(image, size, interpolation=cv2.INTER_AREA)
+        image = self.image if size_px is None else _to_width(self.image, int(size_px))
         return DesignPicture(image, None, self.size_m, self.h_corners_m, self.symmetric)
 
     def scene(
@@ -86,11 +78,8 @@ def picture_design(path: str | Path, size_m: float) -> PictureDesign:
     if not (isinstance(size_m, int | float) and np.isfinite(size_m) and size_m > 0):
         raise ValueError(f"the pad's size must be a positive number of metres, got {size_m!r}")
     image = read_picture(path)
-    h, w = image.shape[:2]
-    if w > TEXTURE_PX:
-        image = cv2.resize(
-            image, (TEXTURE_PX, max(1, round(TEXTURE_PX * h / w))), interpolation=cv2.INTER_AREA
-        )
+    if image.shape[1] > TEXTURE_PX:
+        image = _to_width(image, TEXTURE_PX)
     try:
         reference = Reference.from_image(image, float(size_m))
     except ValueError as exc:
@@ -100,9 +89,16 @@ def picture_design(path: str | Path, size_m: float) -> PictureDesign:
         image=image,
         size_m=float(size_m),
         h_corners_m=reference.corners_m.copy(),
+        h_size_m=reference.h_size_m,
         h_bgr=reference.paint_bgr,
         symmetric=reference.symmetric,
     )
+
+
+def _to_width(image: np.ndarray, width: int) -> np.ndarray:
+    """``image`` resized to ``width`` pixels across, its aspect kept."""
+    h, w = image.shape[:2]
+    return cv2.resize(image, (width, max(1, round(width * h / w))), interpolation=cv2.INTER_AREA)
 
 
 def design_of(design: str | PadDesign) -> PadDesign:
