@@ -9,12 +9,14 @@ edges. Around every small mark of the H's polarity, and the few largest,
 the board is grown: the pixels nearer the board's level (read around the mark) than
 the floor's level around the board (a board lighter or darker than its floor
 alike), as far as they reach; a board that does not stand out of its floor's noise
-is none. Where they make a quadrilateral of the pad's proportions, the whole pad (H
-and marks) is fitted to the edges inside it from each of its four turns (and from
-each inset border's, where the board may have stopped), taken
-affine (so small, its perspective is noise), and kept when many of its H's sides
-and some of its board's outline are found where the fit puts them, and the picture
-inside matches the reference's.
+is none. A board whose H is no mark of the threshold at all (strokes under a pixel)
+may be a hole of it, the floor right around it read lighter than its local mean:
+such a hole is taken for a board as it is. Where they make a quadrilateral of the
+pad's proportions, the whole pad (H and marks) is fitted to the edges inside it
+from each of its four turns (and from each inset border's, where the board may
+have stopped), taken affine (so small, its perspective is noise), and kept when
+many of its H's sides and some of its board's outline are found where the fit puts
+them, and the picture inside matches the reference's.
 
 Only a pad whose picture is its board (every border pixel of the reference the
 same level: `Reference.board_is_outline`) is looked for so.
@@ -24,12 +26,13 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
-from pipeline.homography_fit import affine_part, fit_homography
+from pipeline.homography_fit import affine_part, apply_h, fit_homography, span_of
 from pipeline.jit import compiled
 from pipeline.measure import pad_box_m
 from pipeline.reference import Reference
@@ -62,6 +65,15 @@ MIN_OUTLINE_FOUND = 0.1
 # 550 fits) with some of their board's outline found, none matched above 0.39 (the H's
 # painted on floors, up to 0.86, have no board's outline).
 MIN_H_NCC = 0.7
+# ... and an H whose strokes are under FINE_STROKE_PX (frame pixels), blurred into its
+# board, at MIN_FINE_H_NCC: paper_ring's H's of 6-11 px 4-9 m away (strokes of 0.8-1.6)
+# matched at 0.6-0.7, thin's of 13 px (strokes of 1.2) at 15-17 m alike; nor did any
+# quadrilateral with some outline found match above 0.53 on 2,500 more empty frames
+# (the altitude sweep's floors where seven designs span 19-34 px, and both mixes: 77
+# such fits, the best a dark H painted on a light floor). A larger H matching so little
+# is poorly seen, and so is its pad: paper_ring's of 15 px (strokes of 2.1) at 2.6 m,
+# overexposed, matched at 0.6-0.7 and posed 7 % off.
+MIN_FINE_H_NCC, FINE_STROKE_PX = 0.6, 1.8
 # Its pose counts when the pad's edges are found where it puts them: the bench's far
 # boards posed within 3 % of the altitude found 0.22-0.5 of them, those 10-40 % off, 0.07-0.13.
 MIN_BOARD_SUPPORT = 0.2
@@ -82,11 +94,16 @@ class Board:
 
 
 def find_boards(
-    levels: np.ndarray, shapes: list[Region], reference: Reference, enlarged: float
+    levels: np.ndarray,
+    shapes: list[Region],
+    reference: Reference,
+    enlarged: float,
+    holes: Sequence[Region] = (),
 ) -> list[np.ndarray]:
     """Homographies (pad metres -> view pixels) of the pads found by their boards,
-    best pattern first, on a view's smoothed channel (``levels``) and around its
-    regions of the H's polarity (``shapes``, `pipeline.find.search`'s); ``enlarged``:
+    best pattern first, on a view's smoothed channel (``levels``), around its
+    regions of the H's polarity (``shapes``, `pipeline.find.search`'s) and where
+    the threshold left a board whole, a hole of its mask (``holes``); ``enlarged``:
     view pixels per frame pixel."""
     if not reference.board_is_outline:
         return []
@@ -114,11 +131,15 @@ def find_boards(
         for board in _grow_boards(levels, seed, ratio, MIN_BOARD_PX * enlarged):
             if not any(_same(board.quad, b.quad) for b in boards):
                 boards.append(board)
+    for hole in sorted(holes, key=lambda r: -r.area):
+        board = _board_of_hole(levels, hole, MIN_BOARD_PX * enlarged, widest * ratio)
+        if board is not None and not any(_same(board.quad, b.quad) for b in boards):
+            boards.append(board)
     boards.sort(key=lambda b: -b.contrast)
     found = []
     edges = _board_outlines(reference)
     for board in boards[:MAX_BOARDS]:
-        fitted = _fit_board(levels, reference, board.quad, edges)
+        fitted = _fit_board(levels, reference, board.quad, edges, enlarged)
         if fitted is not None:
             found.append(fitted)
     found.sort(key=lambda f: -f[0])
@@ -171,6 +192,42 @@ def _grow_boards(levels: np.ndarray, mark: Region, ratio: float, min_px: float) 
         if quad is not None:
             boards.append(Board(quad + np.array([x0, y0], np.float64), contrast))
     return boards
+
+
+def _board_of_hole(levels: np.ndarray, hole: Region, min_px: float, max_px: float) -> Board | None:
+    """The board a hole of the mask is, when it is a quadrilateral between ``min_px``
+    and ``max_px`` wide that stands out of the floor around it.
+
+    A board darker than its floor on the channel (the H's paint bright) is left
+    whole by the local threshold: the floor right around it reads lighter than its
+    local mean, a halo with the board for its hole, where the H inside, its strokes a
+    pixel wide, is lost (paper_ring's sheet from 5 m on at 640 x 480).
+    """
+    x, y, w, h = hole.box
+    span = float(max(w, h))
+    if not min_px <= span <= max_px:
+        return None
+    outline = hole.contour.reshape(-1, 1, 2).astype(np.int32)
+    hull = cv2.convexHull(outline)
+    quad = cv2.approxPolyDP(hull, _QUAD_EPS * cv2.arcLength(hull, True), True)
+    if len(quad) != 4:
+        return None
+    if not _FILL[0] <= hole.area / max(cv2.contourArea(quad), 1e-9) <= _FILL[1]:
+        return None
+    # Its level against the floor's, in a window with a margin of floor around it.
+    m = int(0.25 * span) + 3
+    x0, y0 = max(x - m, 0), max(y - m, 0)
+    win = levels[y0 : y + h + m, x0 : x + w + m]
+    floor, noise = _floor_and_noise(win, 2)
+    inside = np.zeros(win.shape, np.uint8)
+    cv2.fillPoly(inside, [quad - np.array([x0, y0], np.int32)], 1)
+    inside = cv2.erode(inside, _CROSS, iterations=2)
+    if not inside.any():
+        return None
+    contrast = abs(float(np.median(win[inside > 0])) - floor)
+    if contrast < MIN_BOARD_CONTRAST or noise > MAX_FLOOR_NOISE * contrast:
+        return None
+    return Board(_clockwise(quad.reshape(4, 2).astype(np.float64)), contrast)
 
 
 @compiled
@@ -315,11 +372,15 @@ def _pad_sized(span: float, mark: float, ratio: float) -> bool:
 
 
 def _fit_board(
-    levels: np.ndarray, reference: Reference, quad: np.ndarray, edges: list[np.ndarray]
+    levels: np.ndarray,
+    reference: Reference,
+    quad: np.ndarray,
+    edges: list[np.ndarray],
+    enlarged: float = 1.0,
 ) -> tuple[float, np.ndarray] | None:
     """The pad fitted from the quadrilateral in each of its four turns, taken for each
     of the board's ``edges`` (`_board_outlines`): the best pattern's (NCC, homography),
-    when it is the pad's."""
+    when it is the pad's (``enlarged``: view pixels per frame pixel)."""
     box = pad_box_m(reference)
     h_sides = np.arange(len(reference.edge_model.polygon)) < len(reference.corners_m)
     outline = _outline_sides(reference)
@@ -345,9 +406,9 @@ def _fit_board(
             continue
         # (an H too small for any of its sides to be told is no evidence)
         sides = _found_share(fit.side_found[h_sides]) >= MIN_H_FOUND and ncc >= MIN_BOARD_NCC
-        if (sides or _h_pattern(levels, reference, H) >= MIN_H_NCC) and (
-            best is None or ncc > best[0]
-        ):
+        stroke = reference.leg_fraction * span_of(apply_h(H, reference.corners_m)) / enlarged
+        bar = MIN_FINE_H_NCC if stroke < FINE_STROKE_PX else MIN_H_NCC
+        if (sides or _h_pattern(levels, reference, H) >= bar) and (best is None or ncc > best[0]):
             best = (ncc, H)
     return best
 

@@ -206,6 +206,7 @@ def search(
     tracking: bool = False,
     enlarged: float = 1.0,
     first_look: bool = False,
+    holes: list[Region] | None = None,
 ) -> tuple[Binarized, list[Region], Iterator[Located]]:
     """The view's binarized channel, its regions of the H's polarity, and the pad's
     H's it holds, best shape first, found as they are asked for (the caller stops
@@ -221,11 +222,13 @@ def search(
     interpolated view holds no more detail: an H's size counts in the frame's pixels).
     ``first_look``: a coarse view searched before the working view, which judges
     again whatever this one turns down (its marks' detail may have merged away).
+    ``holes``: where the boundaries of the mask's holes are appended (for a board the
+    threshold left whole, see `pipeline.board_search.find_boards`).
     """
     binary = reference.binarize(channel, method)
     stages.lap("preprocess")
     area = float(channel.shape[0] * channel.shape[1])
-    found = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=0.5 * area)
+    found = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=0.5 * area, holes=holes)
     tally.shapes += len(found)
     stages.lap("contours")
     return binary, found, _hits(found, image, binary, reference, camera, verifier, tally, stages,

@@ -38,12 +38,15 @@ class Region:
         return float(max(self.box[2], self.box[3]) - 1)
 
 
-def regions(mask: np.ndarray, *, min_area: float, max_area: float) -> list[Region]:
+def regions(
+    mask: np.ndarray, *, min_area: float, max_area: float, holes: list[Region] | None = None
+) -> list[Region]:
     """Boundaries of white regions with area in [min_area, max_area].
 
     Every boundary is listed (RETR_LIST): the H sits inside the dark board,
     which may itself sit inside a bright floor region. Hole boundaries are
-    dropped by their orientation.
+    told by their orientation and appended to ``holes`` when it is given
+    (positively oriented too), else dropped.
     """
     contours, _ = cv2.findContours(mask, cv2.RETR_LIST, cv2.CHAIN_APPROX_NONE)
     min_len = max(8, int(2 * np.sqrt(min_area)))
@@ -58,6 +61,8 @@ def regions(mask: np.ndarray, *, min_area: float, max_area: float) -> list[Regio
         # findContours traces outer boundaries one way and holes the other;
         # an outer boundary of a white region has negative oriented area here.
         if signed > 0:
+            if holes is not None:
+                holes.append(Region(c.reshape(-1, 2).copy(), area))
             continue
         pts = c.reshape(-1, 2)[::-1].copy()  # flip to positive orientation
         out.append(Region(pts, area))

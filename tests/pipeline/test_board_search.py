@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import cv2
 import numpy as np
 import pytest
 
@@ -19,6 +20,7 @@ from pipeline.bench.frames import SCENE_EVERY, make_scenes, make_view
 from pipeline.bench.hint import gravity_hint
 from pipeline.bench.tally import Tally
 from pipeline.board_search import (
+    _board_of_hole,
     _board_outlines,
     _clockwise,
     _fit_board,
@@ -56,11 +58,14 @@ def _far_view(j: int, altitude: float = 20.0):
 
 
 def _boards(frame: np.ndarray, reference: Reference) -> tuple[View, list[np.ndarray]]:
-    """The boards found on the frame enlarged twice, as `process_frame`'s last search."""
+    """The boards found on the frame enlarged twice, as `process_frame`'s last search
+    (around its marks and in its mask's holes)."""
     view = View.enlarged(frame.shape, 1280)
     binary = binarize_channel(to_channel(view.image(frame), reference.projection), "adaptive")
-    shapes = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=binary.mask.size / 2)
-    return view, find_boards(binary.smooth, shapes, reference, view.scale)
+    holes: list = []
+    area = binary.mask.size / 2
+    shapes = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=area, holes=holes)
+    return view, find_boards(binary.smooth, shapes, reference, view.scale, holes)
 
 
 @pytest.mark.parametrize("j", [11, 19, 23])
@@ -116,6 +121,94 @@ def test_no_board_is_found_on_the_same_floor_without_the_pad(reference, j):
     _, empty, _, hint = _far_view(j)
     assert _boards(empty, reference)[1] == []
     assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected
+
+
+def _square_on_a_floor(
+    side_px: float, board: float, floor: float = 170.0, disc: bool = False
+) -> tuple[np.ndarray, np.ndarray]:
+    """A board (a square turned 25 degrees, or a disc) of level ``board`` on a noisy
+    floor, drawn 8 times finer and averaged; and the square's corners (pixels)."""
+    k = 8
+    big = np.full((200 * k, 240 * k), floor, np.float32)
+    a = np.radians(25.0)
+    corners = np.array(
+        [[np.cos(a + t), np.sin(a + t)] for t in np.radians([45, 135, 225, 315])]
+    ) * side_px / np.sqrt(2) + [120.0, 100.0]
+    pts = np.round(((corners + 0.5) * k - 0.5) * 16).astype(np.int32)
+    if disc:
+        cv2.circle(big, (120 * k, 100 * k), int(side_px * k / 2), board, -1)
+    else:
+        cv2.fillPoly(big, [pts], board, shift=4)
+    levels = cv2.resize(big, (240, 200), interpolation=cv2.INTER_AREA)
+    noise = np.random.default_rng(0).normal(0.0, 3.0, levels.shape)
+    return np.clip(levels + noise, 0, 255).astype(np.uint8), corners
+
+
+def _holes(levels: np.ndarray, floor: float, board: float) -> list:
+    holes: list = []
+    mask = ((levels > (floor + board) / 2) * 255).astype(np.uint8)
+    regions(mask, min_area=MIN_H_AREA_PX, max_area=mask.size / 2, holes=holes)
+    return holes
+
+
+def test_a_board_the_threshold_left_whole_is_read_from_its_hole():
+    # A board darker than its floor: the floor around it is the mask's, the board a hole.
+    levels, corners = _square_on_a_floor(50.0, 60.0)
+    (hole,) = [h for h in _holes(levels, 170.0, 60.0) if h.area > 500]
+    board = _board_of_hole(levels, hole, 24.0, 200.0)
+    assert board is not None and 100.0 <= board.contrast <= 120.0, board
+    # Its corners, clockwise on screen, within a pixel and a half of the square's.
+    offset = np.abs(board.quad[:, None, :] - corners[None, :, :]).max(axis=2).min(axis=1)
+    assert offset.max() < 1.5, (board.quad, corners)
+    assert np.array_equal(board.quad, _clockwise(board.quad))
+
+
+@pytest.mark.parametrize(
+    "what, side, board, disc, least",
+    [
+        ("a disc", 50.0, 60.0, True, 24.0),
+        ("a board barely off its floor", 50.0, 164.0, False, 24.0),
+        ("a board narrower than a board is looked for", 16.0, 60.0, False, 24.0),
+    ],
+)
+def test_a_hole_that_is_no_board_is_none(what, side, board, disc, least):
+    levels, _ = _square_on_a_floor(side, board, disc=disc)
+    holes = [h for h in _holes(levels, 170.0, board) if h.area > 100]
+    assert holes  # (there is a hole to read)
+    assert all(_board_of_hole(levels, h, least, 200.0) is None for h in holes), what
+
+
+@pytest.mark.parametrize("j", [11, 13, 16])
+def test_a_sheet_whose_h_the_threshold_loses_is_found_by_the_hole_it_leaves(j):
+    # paper_ring 7.6 m away (the sweep's 22 px point): an H of 5 px with strokes under
+    # a pixel is no mark of the mask, nor grows a board; the sheet is the mask's hole.
+    frame, empty, view, hint, reference = sweep_frames("paper_ring", CAM, 11, 7.636, j)
+    res = process_frame(frame, reference, CAM, gravity_hint=hint)
+    assert res.detected and res.found_by == "board", res.reason
+    tally = Tally()
+    tally.score(True, res.pose, view, get_design("paper_ring").symmetric)
+    assert tally.pos_pct[0] < 3.0 and tally.rot_deg[0] < 2.0, (tally.pos_pct, tally.rot_deg)
+    assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected
+
+
+@pytest.mark.parametrize("j", [26, 33])
+def test_an_h_of_strokes_under_two_pixels_counts_by_a_looser_pattern(j):
+    # paper_ring 4.4 m away: strokes of 1.5 px blurred into the sheet, the H's pattern
+    # at 0.6-0.7, under the bar of a larger H's.
+    frame, empty, view, hint, reference = sweep_frames("paper_ring", CAM, 7, 4.364, j)
+    res = process_frame(frame, reference, CAM, gravity_hint=hint)
+    assert res.detected and res.found_by == "board", res.reason
+    tally = Tally()
+    tally.score(True, res.pose, view, get_design("paper_ring").symmetric)
+    assert tally.pos_pct[0] < 3.0, tally.pos_pct
+    assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected
+
+
+def test_an_h_of_wider_strokes_matching_as_little_is_no_pad():
+    # paper_ring 2.6 m away, overexposed (the real-world mix's view 4): its H's strokes
+    # of 2.1 px matched at 0.6-0.7, and so taken the pad was posed 7 % off.
+    pad, _, hint, _, reference = bench_frames("paper_ring", 0, 4, "real")
+    assert not process_frame(pad, reference, CAM, gravity_hint=hint).detected
 
 
 def test_a_dark_square_holding_a_bright_blob_that_is_no_h_is_not_a_pad(reference):
