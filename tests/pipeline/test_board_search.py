@@ -178,30 +178,32 @@ def test_a_hole_that_is_no_board_is_none(what, side, board, disc, least):
     assert all(_board_of_hole(levels, h, least, 200.0) is None for h in holes), what
 
 
-@pytest.mark.parametrize("j", [11, 13, 16])
-def test_a_sheet_whose_h_the_threshold_loses_is_found_by_the_hole_it_leaves(j):
-    # paper_ring 7.6 m away (the sweep's 22 px point): an H of 5 px with strokes under
-    # a pixel is no mark of the mask, nor grows a board; the sheet is the mask's hole.
-    frame, empty, view, hint, reference = sweep_frames("paper_ring", CAM, 11, 7.636, j)
+def _paper_posed_by_its_board(point: int, altitude: float, j: int) -> Tally:
+    """paper_ring's frame ``j`` of the altitude sweep's ``point``: the pad found by its
+    board (its empty twin not taken), and its pose's errors."""
+    frame, empty, view, hint, reference = sweep_frames("paper_ring", CAM, point, altitude, j)
     res = process_frame(frame, reference, CAM, gravity_hint=hint)
     assert res.detected and res.found_by == "board", res.reason
+    assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected
     tally = Tally()
     tally.score(True, res.pose, view, get_design("paper_ring").symmetric)
+    return tally
+
+
+@pytest.mark.parametrize("j", [11, 13, 16])
+def test_a_sheet_whose_h_the_threshold_loses_is_found_by_the_hole_it_leaves(j):
+    # 7.6 m away (the sweep's 22 px point): an H of 5 px with strokes under a pixel is
+    # no mark of the mask, nor grows a board; the sheet is the mask's hole.
+    tally = _paper_posed_by_its_board(11, 7.636, j)
     assert tally.pos_pct[0] < 3.0 and tally.rot_deg[0] < 2.0, (tally.pos_pct, tally.rot_deg)
-    assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected
 
 
 @pytest.mark.parametrize("j", [26, 33])
 def test_an_h_of_strokes_under_two_pixels_counts_by_a_looser_pattern(j):
-    # paper_ring 4.4 m away: strokes of 1.5 px blurred into the sheet, the H's pattern
-    # at 0.6-0.7, under the bar of a larger H's.
-    frame, empty, view, hint, reference = sweep_frames("paper_ring", CAM, 7, 4.364, j)
-    res = process_frame(frame, reference, CAM, gravity_hint=hint)
-    assert res.detected and res.found_by == "board", res.reason
-    tally = Tally()
-    tally.score(True, res.pose, view, get_design("paper_ring").symmetric)
+    # 4.4 m away: strokes of 1.5 px blurred into the sheet, the H's pattern at 0.6-0.7,
+    # under the bar of a larger H's.
+    tally = _paper_posed_by_its_board(7, 4.364, j)
     assert tally.pos_pct[0] < 3.0, tally.pos_pct
-    assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected
 
 
 def test_an_h_of_wider_strokes_matching_as_little_is_no_pad():
