@@ -126,14 +126,19 @@ def find_boards(
             large.append(region)
     small.sort(key=lambda r: -r.area)
     large.sort(key=lambda r: -r.area)
+    least_board = MIN_BOARD_PX * enlarged
+    grown = [
+        board
+        for seed in small[:MAX_SEEDS] + large[:MAX_LARGE_SEEDS]
+        for board in _grow_boards(levels, seed, ratio, least_board)
+    ]
+    whole = [
+        _board_of_hole(levels, hole, least_board, widest * ratio)
+        for hole in sorted(holes, key=lambda r: -r.area)
+    ]
     boards: list[Board] = []
-    for seed in small[:MAX_SEEDS] + large[:MAX_LARGE_SEEDS]:
-        for board in _grow_boards(levels, seed, ratio, MIN_BOARD_PX * enlarged):
-            if not any(_same(board.quad, b.quad) for b in boards):
-                boards.append(board)
-    for hole in sorted(holes, key=lambda r: -r.area):
-        board = _board_of_hole(levels, hole, MIN_BOARD_PX * enlarged, widest * ratio)
-        if board is not None and not any(_same(board.quad, b.quad) for b in boards):
+    for board in grown + [b for b in whole if b is not None]:
+        if not any(_same(board.quad, b.quad) for b in boards):
             boards.append(board)
     boards.sort(key=lambda b: -b.contrast)
     found = []
@@ -207,12 +212,8 @@ def _board_of_hole(levels: np.ndarray, hole: Region, min_px: float, max_px: floa
     span = float(max(w, h))
     if not min_px <= span <= max_px:
         return None
-    outline = hole.contour.reshape(-1, 1, 2).astype(np.int32)
-    hull = cv2.convexHull(outline)
-    quad = cv2.approxPolyDP(hull, _QUAD_EPS * cv2.arcLength(hull, True), True)
-    if len(quad) != 4:
-        return None
-    if not _FILL[0] <= hole.area / max(cv2.contourArea(quad), 1e-9) <= _FILL[1]:
+    quad = _quad_of(hole.contour.reshape(-1, 1, 2).astype(np.int32))
+    if quad is None or not _FILL[0] <= hole.area / _area(quad) <= _FILL[1]:
         return None
     # Its level against the floor's, in a window with a margin of floor around it.
     m = int(0.25 * span) + 3
@@ -220,14 +221,14 @@ def _board_of_hole(levels: np.ndarray, hole: Region, min_px: float, max_px: floa
     win = levels[y0 : y + h + m, x0 : x + w + m]
     floor, noise = _floor_and_noise(win, 2)
     inside = np.zeros(win.shape, np.uint8)
-    cv2.fillPoly(inside, [quad - np.array([x0, y0], np.int32)], 1)
+    cv2.fillPoly(inside, [np.rint(quad - [x0, y0]).astype(np.int32)], 1)
     inside = cv2.erode(inside, _CROSS, iterations=2)
     if not inside.any():
         return None
     contrast = abs(float(np.median(win[inside > 0])) - floor)
     if contrast < MIN_BOARD_CONTRAST or noise > MAX_FLOOR_NOISE * contrast:
         return None
-    return Board(_clockwise(quad.reshape(4, 2).astype(np.float64)), contrast)
+    return Board(_clockwise(quad), contrast)
 
 
 @compiled
@@ -348,21 +349,32 @@ def _board_quad(
         return None  # it runs into the floor: no board's edge all round
     outlines, _ = cv2.findContours(part, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     outline = max(outlines, key=cv2.contourArea)
-    hull = cv2.convexHull(outline)
-    quad = cv2.approxPolyDP(hull, _QUAD_EPS * cv2.arcLength(hull, True), True)
-    if len(quad) != 4:
+    quad = _quad_of(outline)
+    if quad is None:
         return None
-    quad_area = max(cv2.contourArea(quad), 1e-9)
+    quad_area = _area(quad)
     fill = cv2.contourArea(outline) / quad_area
     # The board itself, beside the mark: an H's own outline is a quadrilateral too.
     board_share = np.count_nonzero(part & (1 - seed)) / quad_area
-    quad = quad.reshape(4, 2).astype(np.float64)
     span = float(np.ptp(quad, axis=0).max())
     if not _FILL[0] <= fill <= _FILL[1] or board_share < MIN_BOARD_SHARE:
         return None
     if span < min_px or not _pad_sized(span, size, ratio):
         return None
     return _clockwise(quad)
+
+
+def _quad_of(outline: np.ndarray) -> np.ndarray | None:
+    """The quadrilateral (4 x 2, float) that an outline's (N x 1 x 2 int32) convex hull
+    makes, or None when it makes none."""
+    hull = cv2.convexHull(outline)
+    quad = cv2.approxPolyDP(hull, _QUAD_EPS * cv2.arcLength(hull, True), True)
+    return quad.reshape(4, 2).astype(np.float64) if len(quad) == 4 else None
+
+
+def _area(quad: np.ndarray) -> float:
+    """A polygon's area (at least a tiny one: it divides)."""
+    return max(float(cv2.contourArea(quad.astype(np.float32))), 1e-9)
 
 
 def _pad_sized(span: float, mark: float, ratio: float) -> bool:

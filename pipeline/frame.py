@@ -35,7 +35,7 @@ import numpy as np
 
 from pipeline.board_search import MIN_BOARD_PX, MIN_BOARD_SUPPORT, find_boards
 from pipeline.camera import Camera
-from pipeline.candidates import MIN_EVIDENCE, MIN_H_AREA_PX, fit_h_sides
+from pipeline.candidates import MIN_EVIDENCE, fit_h_sides
 from pipeline.find import (
     FIRST_LOOK_MIN_SPAN_PX,
     CandidateVerifier,
@@ -61,7 +61,7 @@ from pipeline.preprocess import (
 )
 from pipeline.reference import SEARCH_WIDTH_PX, Reference
 from pipeline.result import FrameResult
-from pipeline.shapes import Region, regions
+from pipeline.shapes import Region
 from pipeline.view import MAX_ENLARGEMENT, View, enlargement
 
 # Tried in turn when the default threshold finds nothing: thresholds that hold across
@@ -199,8 +199,10 @@ def process_frame(
         tries.append(("search", native, method))
     tries.append(("search", far, method))
     far_found: tuple[Binarized, list[Region]] | None = None
-    far_holes: list[Region] = []  # (its mask's: a board the threshold left whole)
-    working: Binarized | None = None  # (the working view's mask, for its holes too)
+    # (the holes of its mask, and of the working view's with the frame's own threshold: a
+    # board the threshold left whole; a few a frame, kept as the contours are traced)
+    far_holes: list[Region] = []
+    working_holes: list[Region] = []
     # (the whole frame is searched three ways: its picture and channel made once)
     pictures: dict[View, tuple[np.ndarray, np.ndarray]] = {}
     halvings: Halvings = []  # (the frame's, shared by its coarser views)
@@ -211,6 +213,8 @@ def process_frame(
         if view not in pictures:
             picture = view.image(image, halvings)
             pictures[view] = (picture, to_channel(picture, reference.projection))
+        working = view is search_view and how == method
+        view_holes = far_holes if view is far else (working_holes if working else None)
         binary, shapes, hits = search(
             *pictures[view],
             reference,
@@ -223,7 +227,7 @@ def process_frame(
             tracking=way == "track",
             enlarged=max(1.0, view.scale),
             first_look=view is coarse,
-            holes=far_holes if view is far else None,
+            holes=view_holes,
         )
         if view is coarse:  # (shown: the working view's threshold, made when asked for)
             mask = functools.partial(_working_mask, image, search_view, reference, how)
@@ -231,8 +235,6 @@ def process_frame(
             mask = functools.partial(_mask_for, binary.mask, view, search_view)
         if view is far:
             far_found = (binary, shapes)
-        elif view is search_view and how == method:
-            working = binary
         for hit in hits:
             H_found, found = to_frame @ hit.fit.H, (view, binary.smooth)
             if view is coarse:
@@ -266,7 +268,7 @@ def process_frame(
     if far_found is not None:
         far_binary, shapes = far_found
         to_frame = far.to_frame
-        holes = far_holes + _holes_in(far, search_view, working)
+        holes = far_holes + _holes_in(far, search_view, working_holes)
         for H in find_boards(far_binary.smooth, shapes, reference, max(1.0, far.scale), holes):
             if verifier is not None:
                 # The verifier judges the H the board puts where it is, as any H.
@@ -287,16 +289,13 @@ def process_frame(
     return _nothing(stages.timings, t_start, tally.reason(reference.polarity), mask)
 
 
-def _holes_in(far: View, view: View, binary: Binarized | None) -> list[Region]:
+def _holes_in(far: View, view: View, holes: list[Region]) -> list[Region]:
     """The holes of ``view``'s mask wide enough for a board (`MIN_BOARD_PX`), in the
     pixels of ``far``: the working view's threshold leaves whole some boards that the
     enlarged view's noise breaks into, and the reverse (2 more of paper_ring's sheets
-    in 100 far views, 7.6-8.8 m away at 640 x 480). Traced here, for the frames that
-    come this far only."""
-    if binary is None or view == far:
+    in 100 far views, 7.6-8.8 m away at 640 x 480)."""
+    if view == far:
         return []
-    holes: list[Region] = []
-    regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=0.5 * binary.mask.size, holes=holes)
     M = far.matrix @ view.to_frame
     scale = float(M[0, 0])
     least = MIN_BOARD_PX * max(1.0, far.scale) / scale
