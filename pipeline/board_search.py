@@ -16,7 +16,8 @@ pad's proportions, the whole pad (H and marks) is fitted to the edges inside it
 from each of its four turns (and from each inset border's, where the board may
 have stopped), taken affine (so small, its perspective is noise), and kept when
 many of its H's sides and some of its board's outline are found where the fit puts
-them, and the picture inside matches the reference's.
+them, and the picture inside matches the reference's, the H telling which of the
+board's turns is the pad's.
 
 Only a pad whose picture is its board (every border pixel of the reference the
 same level: `Reference.board_is_outline`) is looked for so.
@@ -74,6 +75,11 @@ MIN_H_NCC = 0.7
 # is poorly seen, and so is its pad: paper_ring's of 15 px (strokes of 2.1) at 2.6 m,
 # overexposed, matched at 0.6-0.7 and posed 7 % off.
 MIN_FINE_H_NCC, FINE_STROKE_PX = 0.6, 1.8
+# A square board's four turns look alike but for the H: the turn taken must match the H's
+# pattern better than the pad turned a quarter round does, by this much. On the altitude
+# sweep's far boards (four designs, 172 found), the one posed turned a quarter round
+# (paper_ring at 13 m, an H of 4 px) matched 0.03 better; 4 posed right by 0.05 or less.
+QUARTER_MARGIN = 0.08
 # Its pose counts when the pad's edges are found where it puts them: the bench's far
 # boards posed within 3 % of the altitude found 0.22-0.5 of them, those 10-40 % off, 0.07-0.13.
 MIN_BOARD_SUPPORT = 0.2
@@ -422,7 +428,23 @@ def _fit_board(
         bar = MIN_FINE_H_NCC if stroke < FINE_STROKE_PX else MIN_H_NCC
         if (sides or _h_pattern(levels, reference, H) >= bar) and (best is None or ncc > best[0]):
             best = (ncc, H)
+    if best is not None and _turn_untold(levels, reference, best[1]):
+        return None
     return best
+
+
+def _turn_untold(levels: np.ndarray, reference: Reference, H: np.ndarray) -> bool:
+    """Whether the pad turned a quarter round either way matches the H's pattern about as
+    well as ``H`` (within ``QUARTER_MARGIN``): so small, the H does not tell which of
+    its board's turns is the pad's (nor, with it, where the camera is over the pad)."""
+    own = _h_pattern(levels, reference, H)
+    cx, cy = pad_box_m(reference).mean(axis=0)
+    for sign in (1.0, -1.0):
+        # (pad metres turned a quarter round about the pad's centre)
+        quarter = np.array([[0.0, -sign, cx + sign * cy], [sign, 0.0, cy - sign * cx], [0, 0, 1.0]])
+        if not _h_pattern(levels, reference, H @ quarter) < own - QUARTER_MARGIN:
+            return True
+    return False
 
 
 def _board_outlines(reference: Reference) -> list[np.ndarray]:

@@ -24,6 +24,9 @@ from pipeline.edges import refine_polygon
 
 MIN_MARK_AREA = 0.0005  # of the picture: smaller specks are texture, not marks
 MAX_MARKS = 16
+# A half turn maps a mark onto one whose centre lies this near (of the H's size) and whose
+# area is within a tenth of its own.
+HALF_TURN_TOL = 0.03
 FLATNESS = 0.0005  # Douglas-Peucker tolerance, of a mark's perimeter (>= 0.5 px)
 MAX_SIDES = 96
 REPEATED_PX = 0.5  # a vertex this near the one before it is the same corner
@@ -299,18 +302,27 @@ def _deviation(pts: np.ndarray, poly: np.ndarray) -> float:
 def symmetric_marks(corners_m: np.ndarray, marks: tuple[Mark, ...]) -> bool:
     """Whether a half turn about the pad centre maps the H's corners and every mark
     (by its centre, area and brightness) onto one."""
-    tol = 0.03 * float(np.ptp(corners_m, axis=0).max())
+    tol = HALF_TURN_TOL * float(np.ptp(corners_m, axis=0).max())
     d = np.linalg.norm(-corners_m[:, None, :] - corners_m[None, :, :], axis=2)
     if not np.all(d.min(axis=1) < tol):
         return False
+    return not any(moved_by_half_turn(np.zeros(2), marks, tol))
+
+
+def moved_by_half_turn(centre_m: np.ndarray, marks: tuple[Mark, ...], tol_m: float) -> list[bool]:
+    """For each mark, whether a half turn about ``centre_m`` moves it onto no mark (by
+    its centre, within ``tol_m``, its area and brightness): the marks that tell which
+    way round the pad lies."""
     stats = [(_centre(m.corners_m), _area(m.corners_m), m.bright) for m in marks]
-    for c, a, bright in stats:
-        if not any(
-            b == bright and np.linalg.norm(-c - c2) < tol and abs(a - a2) <= 0.1 * max(a, a2)
+    return [
+        not any(
+            b == bright
+            and np.linalg.norm(2.0 * centre_m - c - c2) < tol_m
+            and abs(a - a2) <= 0.1 * max(a, a2)
             for c2, a2, b in stats
-        ):
-            return False
-    return True
+        )
+        for c, a, bright in stats
+    ]
 
 
 def _area(poly: np.ndarray) -> float:

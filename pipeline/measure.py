@@ -132,7 +132,10 @@ ALONG_GRID_DEG = 3.0  # the H's sides this near the pixel grid: see `_unlocked`
 # them 0.34-0.62 px; on a far orange_ring in the real-world mix (H 23 px), 0.81, and
 # put the pad 6.0 % of its height off, not 2.1.
 MAX_UNLOCK_PX = 0.75
-HEADING_MARGIN = 0.05  # of the marks' edges: one half turn must find this many more
+# Of the heading marks' edges (`_heading`): one half turn must find this many more. On the
+# altitude sweep's and both mixes' views of serif_octagon and paper_ring (809 poses),
+# neither 0.05 nor this told a wrong turn; this told 97-100 % as many.
+HEADING_MARGIN = 0.1
 
 
 @dataclass(frozen=True, eq=False)
@@ -511,15 +514,18 @@ def _heading(H: np.ndarray, reference: Reference, levels: np.ndarray) -> tuple[n
 
     The H alone looks the same after a half turn; on a pad whose other marks
     do not (a triangle, stars above the H), the turn under which more of the
-    marks' edges are found is the pad's. The marks' sides long enough to tell
-    (``MARK_SIDE_PX``) decide first; the shorter ones count too when those look
-    the same both ways (a star's points; but a far pad's lettering, its sides a
-    pixel or two, outnumbered its board's and turned it about). When both turns
-    find about as few of them (``HEADING_MARGIN``: the marks blurred or too small
-    to see), the frame does not tell the heading: the pose is then reported as a
-    symmetric pad's, for the caller's heading to decide.
+    edges of those marks (`Reference.heading_model`) are found is the pad's: the
+    marks a half turn maps onto themselves (a ring, an octagon, rims) find theirs
+    alike both ways, and their noise told the wrong turn (on the altitude sweep's
+    views of serif_octagon, 6 of 243 poses, 8.7-19.6 m away, were turned about,
+    told by rims and octagon while the stars went unseen). The sides long enough to
+    tell (``MARK_SIDE_PX``) decide first; the shorter ones count too when those look
+    the same both ways (a star's points). When both turns find about as few of
+    them (``HEADING_MARGIN``: the marks blurred or too small to see), the frame does
+    not tell the heading: the pose is then reported as a symmetric pad's, for the
+    caller's heading to decide.
     """
-    model = reference.marks_model
+    model = reference.heading_model
     if reference.symmetric or model is None:
         return H, False
     # The H is what was located: its twin is a half turn about the H's centre, which

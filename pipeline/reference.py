@@ -17,7 +17,14 @@ from pipeline.edgefit import EdgeModel
 from pipeline.edges import refine_polygon
 from pipeline.hfit import HFit, fit_h, h_deformation
 from pipeline.homography_fit import Deformation
-from pipeline.marks import Mark, band_beyond, find_marks, symmetric_marks
+from pipeline.marks import (
+    HALF_TURN_TOL,
+    Mark,
+    band_beyond,
+    find_marks,
+    moved_by_half_turn,
+    symmetric_marks,
+)
 from pipeline.moments import shape_moments
 from pipeline.preprocess import (
     Binarized,
@@ -161,6 +168,28 @@ class Reference:
             return None
         rims = {k: 0.0 for k, m in enumerate(self.marks) if m.rim}
         return EdgeModel.from_polygons([(m.corners_m, m.bright) for m in self.marks], rims=rims)
+
+    @cached_property
+    def heading_model(self) -> EdgeModel | None:
+        """`marks_model`'s sides of the marks that a half turn about the H's centre moves
+        onto no mark (a triangle, stars above the H; a board the H sits off the centre
+        of): only they tell which way round the pad lies. None when none does."""
+        model = self.marks_model
+        if model is None:
+            return None
+        tol = HALF_TURN_TOL * float(np.ptp(self.corners_m, axis=0).max())
+        moved = np.flatnonzero(moved_by_half_turn(self.h_centre_m, self.marks, tol))
+        keep = np.isin(model.polygon, moved)
+        if not keep.any():
+            return None
+        return EdgeModel(
+            model.a_m[keep],
+            model.b_m[keep],
+            model.bright[keep],
+            model.polygon[keep],
+            model.clearance_m[keep],  # (as among all the marks: their edges are there)
+            model.curved[keep],
+        )
 
     @cached_property
     def board_is_outline(self) -> bool:

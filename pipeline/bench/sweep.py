@@ -3,10 +3,14 @@
 At each point of the sweep, ``frames`` views of the pad (a random yaw, the pad
 anywhere in the image, the ``--degrade`` mix with the swept quantity fixed) are
 rendered, and the same views of an ArUco marker (DICT_4X4_50) and of an AprilTag 3
-marker (tag36h11) whose black squares are the pad's size. For each detector and
-point: detection rate, position error (% of altitude) and rotation error (degrees)
-against the truth, and milliseconds per frame; the frames go to each detector at
-their native resolution (60 degree HFOV).
+marker (tag36h11) whose black squares are the pad's size, and the same views of the
+floor without either (the empty twins: the scene's look-alikes stay). For each
+detector and point: detection rate, position error (% of altitude) and rotation
+error (degrees) against the truth, the share of frames posed over
+``tally.WRONG_POSE_PCT`` off (something else taken for the pad, or the planar pose's
+other solution), the share of empty twins where something was found, and
+milliseconds per frame (on the frames with the pad); the frames go to each detector
+at their native resolution (60 degree HFOV).
 
 - ``altitude``: 1 m to the altitude where the pad spans 12 px (for the 0.55 m pad:
   ~25 m at 640x480, ~51 m at 1280x720, ~76 m at 1920x1080; other pads scaled with
@@ -133,8 +137,9 @@ def run_sweep(
                 scenes = pool[slot]
                 view, noise_seed = make_view([seed, p, j, 11], camera, d, degrade, **_fix(kind, x))
                 frame = render_view(scenes.pad, camera, view, np.random.default_rng(noise_seed))
+                empty = render_view(scenes.empty, camera, view, np.random.default_rng(noise_seed))
                 g = gravity_hint(view.R_pad_cam, [seed, p, j, 12]) if hint else None
-                _visland(tallies["visland"], frame, reference, camera, view, d, method, g)
+                _visland(tallies["visland"], frame, empty, reference, camera, view, d, method, g)
                 for name, det in detectors.items():
                     img = render_view(
                         scenes.markers[name], camera, view, np.random.default_rng(noise_seed)
@@ -143,6 +148,7 @@ def run_sweep(
                     pose = det.pose(img, camera)
                     tallies[name].time(time.perf_counter() - t0, {})
                     tallies[name].score(pose is not None, pose, view, False)
+                    tallies[name].false_positive(det.pose(empty, camera) is not None)
             point = {_X_KEY[kind]: x}
             if kind == "altitude":
                 point["pad_span_px"] = camera.fx * d.size_m / x
@@ -177,21 +183,33 @@ def _fix(kind: str, x: float) -> dict:
     return {"min_tilt_deg": x, "max_tilt_deg": x}
 
 
-def _visland(tally, frame, reference, camera, view, design, method, hint=None) -> None:
+def _visland(tally, frame, empty, reference, camera, view, design, method, hint=None) -> None:
     if reference is None:
         tally.score(False, None, view, design.symmetric)
+        tally.false_positive(False)
         return
     t0 = time.perf_counter()
     res = process_frame(frame, reference, camera, method=method, gravity_hint=hint)
     tally.time(time.perf_counter() - t0, {})
     tally.score(res.detected and res.pose is not None, res.pose, view, design.symmetric)
+    # (the same attitude: a vehicle knows it whether or not the pad is in view)
+    seen = process_frame(empty, reference, camera, method=method, gravity_hint=hint)
+    tally.false_positive(seen.detected)
+
+
+_POINT_KEYS = (
+    "detection_rate",
+    "position_error_pct",
+    "rotation_error_deg",
+    "wrong_pose_rate",
+    "false_positive_rate",
+    "ms_per_frame",
+)
 
 
 def _point_summary(t: Tally) -> dict:
     s = t.summary()
-    return {k: s[k] for k in ("detection_rate", "position_error_pct", "rotation_error_deg")} | {
-        "ms_per_frame": s["ms_per_frame"]
-    }
+    return {k: s[k] for k in _POINT_KEYS}
 
 
 def plot_sweep(result: dict, plot_dir: str) -> list[str]:
@@ -243,6 +261,12 @@ def plot_sweep(result: dict, plot_dir: str) -> list[str]:
                 xlabel=xlabel,
                 ylabel="degrees",
                 log_y=True,
+            ),
+            line_panel(
+                series("false_positive_rate", None),
+                title="found on the empty twin views (false positives)",
+                xlabel=xlabel,
+                ylabel="share",
             ),
             line_panel(
                 series("ms_per_frame", "median"),

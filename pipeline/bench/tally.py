@@ -8,6 +8,10 @@ from pipeline.pose import TURN, rotation_angle_deg
 from pipeline.render import View
 from pipeline.result import Pose
 
+# A pose this far off (% of the altitude) took something else for the pad, or the wrong
+# one of the planar pose's two solutions: a wrong pose, not an imprecise one.
+WRONG_POSE_PCT = 10.0
+
 
 class Tally:
     """Detection and false-positive rates, pose errors against the truth, times."""
@@ -19,6 +23,7 @@ class Tally:
         self.fp = 0
         self.twins = 0
         self.untold = 0
+        self.wrong = 0
         self.pos_pct: list[float] = []
         self.rot_deg: list[float] = []
         self.ms: list[float] = []
@@ -36,7 +41,8 @@ class Tally:
 
         For a pad that is not symmetric, a pose nearer the turned twin than the truth is
         counted in ``twin_rate`` (and scored against the truth, i.e. as wrong); a pose
-        of it that did not tell its heading, in ``heading_untold_rate``.
+        of it that did not tell its heading, in ``heading_untold_rate``. A pose over
+        ``WRONG_POSE_PCT`` off counts in ``wrong_pose_rate`` (of the frames).
         """
         self.n += 1
         if not detected or pose is None:
@@ -52,6 +58,7 @@ class Tally:
             self.twins += 1
         self.pos_pct.append(pos)
         self.rot_deg.append(rot)
+        self.wrong += int(pos > WRONG_POSE_PCT)
 
     def false_positive(self, detected: bool) -> None:
         self.fp_frames += 1
@@ -61,6 +68,7 @@ class Tally:
         return {
             "detection_rate": self.detected / max(self.n, 1),
             "false_positive_rate": self.fp / max(self.fp_frames, 1),
+            "wrong_pose_rate": self.wrong / max(self.n, 1),
             "position_error_pct": stats(self.pos_pct),
             "rotation_error_deg": stats(self.rot_deg),
             "ms_per_frame": stats(self.ms),

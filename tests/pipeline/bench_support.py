@@ -84,12 +84,14 @@ def _views(design: Design, seed: int, i: int, level: str, **changes):
     return pad, empty, gravity_hint(view.R_pad_cam, [seed, i, 11]), view
 
 
-def sweep_frames(design: str, camera: Camera, point: int, altitude: float, j: int):
-    """Frame ``j`` of point ``point`` of ``pipeline.bench --sweep altitude`` (its
-    seeds): the pad's frame, its empty twin, the view, the attitude hint and the
-    reference."""
+def sweep_frames(
+    design: str, camera: Camera, point: int, altitude: float, j: int, per_point: int = 40
+):
+    """Frame ``j`` of point ``point`` of ``pipeline.bench --sweep altitude --frames
+    per_point`` (its seeds): the pad's frame, its empty twin, the view, the attitude
+    hint and the reference."""
     d = get_design(design)
-    scenes = make_scenes(d, [0, 1000 + (point * 40 + j) // SCENE_EVERY % 4], "today", ())
+    scenes = make_scenes(d, [0, 1000 + (point * per_point + j) // SCENE_EVERY % 4], "today", ())
     view, noise_seed = make_view([0, point, j, 11], camera, d, "today", altitude=(altitude,) * 2)
     pad = render_view(scenes.pad, camera, view, np.random.default_rng(noise_seed))
     empty = render_view(scenes.empty, camera, view, np.random.default_rng(noise_seed))

@@ -15,9 +15,11 @@ from pipeline.bench.frames import altitude_for, view_options
 from pipeline.bench.markers import AprilTagDetector, ArucoDetector, marker_texture
 from pipeline.bench.plot import line_panel, nice_ticks
 from pipeline.bench.sweep import YAW_POINTS_DEG, altitude_points, range90, run_sweep
+from pipeline.bench.tally import WRONG_POSE_PCT, Tally
 from pipeline.camera import Camera
 from pipeline.preprocess import DEFAULT_METHOD
 from pipeline.render import DESIGNS, make_scene, random_view, render_view
+from pipeline.result import Pose
 
 TODAY_KEYS = ("detection_rate", "false_positive_rate", "position_error_pct",
               "rotation_error_deg", "ms_per_frame", "stages_ms", "aruco",
@@ -69,6 +71,21 @@ def test_markers_give_the_true_pose(kind: str) -> None:
         assert np.linalg.norm(pose.position_m - v.position_m) < 0.02 * v.altitude_m
 
 
+def test_tally_counts_wrong_poses_of_the_frames() -> None:
+    """A pose over WRONG_POSE_PCT of the altitude off is wrong, not imprecise; a frame
+    with no pose is missed, not wrong."""
+    cam = Camera.from_fov(640, 480, 60.0)
+    v = random_view(np.random.default_rng(3), cam, altitude=(4.0, 4.0), snr_db=None, lighting=False)
+    tally = Tally()
+    for off_pct in (2.0, WRONG_POSE_PCT - 0.5, WRONG_POSE_PCT + 0.5, 30.0):
+        shift = np.array([off_pct / 100 * v.altitude_m, 0.0, 0.0])
+        tally.score(True, Pose(v.position_m + shift, v.R_pad_cam, 0.1, False), v, False)
+    tally.score(False, None, v, False)
+    s = tally.summary()
+    assert s["wrong_pose_rate"] == pytest.approx(2 / 5)
+    assert s["detection_rate"] == pytest.approx(4 / 5)
+
+
 def test_altitude_points_reach_twelve_pixels() -> None:
     cam = Camera.from_fov(640, 480, 60.0)
     pts = altitude_points(DESIGNS["default"], cam)
@@ -90,10 +107,14 @@ def test_altitude_sweep_json_and_plot(tmp_path) -> None:
     first = res["points"][0]
     assert first["altitude_m"] == 1.0 and first["pad_span_px"] > 300
     for det in ("visland", "aruco", "apriltag"):
-        for key in ("detection_rate", "position_error_pct", "rotation_error_deg", "ms_per_frame"):
-            assert key in first[det]
-    # At 1 m every detector sees its marker or pad.
-    assert first["aruco"]["detection_rate"] == 1.0 and first["apriltag"]["detection_rate"] == 1.0
+        assert set(first[det]) == {
+            "detection_rate", "position_error_pct", "rotation_error_deg", "wrong_pose_rate",
+            "false_positive_rate", "ms_per_frame",
+        }  # fmt: skip
+    # At 1 m every detector sees its marker or pad, right, and nothing on the empty floor.
+    for det in ("visland", "aruco", "apriltag"):
+        assert first[det]["detection_rate"] == 1.0
+        assert first[det]["wrong_pose_rate"] == 0.0 and first[det]["false_positive_rate"] == 0.0
     assert len(out["plots"]) == 1 and cv2.imread(out["plots"][0]) is not None
 
 
