@@ -496,8 +496,15 @@ def _plain_light_board(reference: Reference) -> bool:
 
 
 def _pattern_around(hit: Located, binary: Binarized, reference: Reference) -> bool:
-    """Whether the whole pad's pattern around a small H matches the reference's."""
+    """Whether the whole pad's pattern around a small H matches the reference's; never
+    for a pad whose pattern is its H alone (no marks painted around it, nor a board:
+    an H painted on grass), which would be the H vouching for itself. So small, an H of
+    hairline strokes painted on the grass matched grass_paint's 0.78 and more: taken
+    for the pad, 50 m away (its H 13 px), in 6 of a scene's 10 empty views, and once
+    instead of the pad (that pad found in 13 of 20 views instead of 16)."""
     if reference.marks_model is None or _plain_light_board(reference):
+        return False
+    if not (reference.painted_marks or reference.board_is_outline):
         return False
     pattern = pad_pattern(
         binary.smooth,

@@ -71,7 +71,7 @@ def bench_frames(design_name: str, seed: int, i: int, level: str, **changes):
     to the view (`pipeline.render.view.View` fields): its pad, its empty twin, the
     attitude hint, the view and the design's reference."""
     pad, empty, hint, view = _views(get_design(design_name), seed, i, level, **changes)
-    return pad, empty, hint, view, _reference(design_name)
+    return pad, empty, hint, view, design_reference(design_name)
 
 
 def _views(design: Design, seed: int, i: int, level: str, **changes):
@@ -95,7 +95,7 @@ def sweep_frames(
     view, noise_seed = make_view([0, point, j, 11], camera, d, "today", altitude=(altitude,) * 2)
     pad = render_view(scenes.pad, camera, view, np.random.default_rng(noise_seed))
     empty = render_view(scenes.empty, camera, view, np.random.default_rng(noise_seed))
-    reference = _reference(design)
+    reference = design_reference(design)
     return pad, empty, view, gravity_hint(view.R_pad_cam, [0, point, j, 12]), reference
 
 
@@ -109,11 +109,12 @@ def yaw_frames(design: str, yaw_deg: float, j: int):
         [0, 0, j, 11], CAM, d, "today", yaw_deg=yaw_deg, max_tilt_deg=HOVER_TILT_DEG
     )
     pad = render_view(scenes.pad, CAM, view, np.random.default_rng(noise_seed))
-    return pad, view, gravity_hint(view.R_pad_cam, [0, 0, j, 12]), _reference(design)
+    return pad, view, gravity_hint(view.R_pad_cam, [0, 0, j, 12]), design_reference(design)
 
 
 @functools.lru_cache(maxsize=4)
-def _reference(design_name: str) -> Reference:
+def design_reference(design_name: str) -> Reference:
+    """The reference the bench makes of a design's picture."""
     design = get_design(design_name)
     return Reference.from_image(design.draw().image, design.size_m)
 

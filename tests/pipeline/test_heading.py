@@ -13,12 +13,7 @@ from pipeline import Reference, process_frame
 from pipeline.bench.sweep import altitude_points
 from pipeline.bench.tally import TURN, pose_errors
 from pipeline.render import get_design
-from tests.pipeline.bench_support import CAM, bench_frames, sweep_frames
-
-
-def _reference(name: str) -> Reference:
-    design = get_design(name)
-    return Reference.from_image(design.draw().image, design.size_m)
+from tests.pipeline.bench_support import CAM, bench_frames, design_reference, sweep_frames
 
 
 def _marks_of(reference: Reference) -> set[int]:
@@ -27,13 +22,13 @@ def _marks_of(reference: Reference) -> set[int]:
 
 
 def test_the_heading_marks_are_those_a_half_turn_moves() -> None:
-    serif = _reference("serif_octagon")
+    serif = design_reference("serif_octagon")
     stars = {k for k, m in enumerate(serif.marks) if len(m.corners_m) == 10}
     assert len(stars) == 3 and _marks_of(serif) == stars  # not the octagon nor its rims
-    paper = _reference("paper_ring")  # its triangle, not its ring nor its sheet
+    paper = design_reference("paper_ring")  # its triangle, not its ring nor its sheet
     assert [len(paper.marks[k].corners_m) for k in _marks_of(paper)] == [3]
     for name in ("default", "icao_circle", "orange_ring"):  # nothing tells: symmetric
-        assert _reference(name).heading_model is None
+        assert design_reference(name).heading_model is None
 
 
 # The altitude sweep's views (20 a point) of serif_octagon whose heading the rims and
