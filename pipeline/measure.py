@@ -134,7 +134,7 @@ ALONG_GRID_DEG = 3.0  # the H's sides this near the pixel grid: see `_unlocked`
 MAX_UNLOCK_PX = 0.75
 # Of the heading marks' edges (`_heading`): one half turn must find this many more. On the
 # altitude sweep's and both mixes' views of serif_octagon and paper_ring (809 poses),
-# neither 0.05 nor this told a wrong turn; this told 97-100 % as many.
+# neither 0.05 nor this told a wrong turn; this told 94-100 % as many.
 HEADING_MARGIN = 0.1
 
 
