@@ -8,7 +8,8 @@ floor without either (the empty twins: the scene's look-alikes stay). For each
 detector and point: detection rate, position error (% of altitude) and rotation
 error (degrees) against the truth, the share of frames posed over
 ``tally.WRONG_POSE_PCT`` off (something else taken for the pad, or the planar pose's
-other solution), the share of empty twins where something was found, and
+other solution) and of those not flagged ambiguous, the share of empty twins where
+something was found, and
 milliseconds per frame (on the frames with the pad); the frames go to each detector
 at their native resolution (60 degree HFOV).
 
@@ -202,6 +203,7 @@ _POINT_KEYS = (
     "position_error_pct",
     "rotation_error_deg",
     "wrong_pose_rate",
+    "silent_wrong_pose_rate",
     "false_positive_rate",
     "ms_per_frame",
 )

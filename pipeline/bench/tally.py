@@ -24,6 +24,7 @@ class Tally:
         self.twins = 0
         self.untold = 0
         self.wrong = 0
+        self.silent = 0
         self.pos_pct: list[float] = []
         self.rot_deg: list[float] = []
         self.ms: list[float] = []
@@ -42,7 +43,8 @@ class Tally:
         For a pad that is not symmetric, a pose nearer the turned twin than the truth is
         counted in ``twin_rate`` (and scored against the truth, i.e. as wrong); a pose
         of it that did not tell its heading, in ``heading_untold_rate``. A pose over
-        ``WRONG_POSE_PCT`` off counts in ``wrong_pose_rate`` (of the frames).
+        ``WRONG_POSE_PCT`` off counts in ``wrong_pose_rate`` (of the frames), and in
+        ``silent_wrong_pose_rate`` too where it was not flagged ``pose.ambiguous``.
         """
         self.n += 1
         if not detected or pose is None:
@@ -58,7 +60,9 @@ class Tally:
             self.twins += 1
         self.pos_pct.append(pos)
         self.rot_deg.append(rot)
-        self.wrong += int(pos > WRONG_POSE_PCT)
+        if pos > WRONG_POSE_PCT:
+            self.wrong += 1
+            self.silent += int(not pose.ambiguous)
 
     def false_positive(self, detected: bool) -> None:
         self.fp_frames += 1
@@ -69,6 +73,7 @@ class Tally:
             "detection_rate": self.detected / max(self.n, 1),
             "false_positive_rate": self.fp / max(self.fp_frames, 1),
             "wrong_pose_rate": self.wrong / max(self.n, 1),
+            "silent_wrong_pose_rate": self.silent / max(self.n, 1),
             "position_error_pct": stats(self.pos_pct),
             "rotation_error_deg": stats(self.rot_deg),
             "ms_per_frame": stats(self.ms),

@@ -72,17 +72,19 @@ def test_markers_give_the_true_pose(kind: str) -> None:
 
 
 def test_tally_counts_wrong_poses_of_the_frames() -> None:
-    """A pose over WRONG_POSE_PCT of the altitude off is wrong, not imprecise; a frame
-    with no pose is missed, not wrong."""
+    """A pose over WRONG_POSE_PCT of the altitude off is wrong, not imprecise, and silently
+    so unless flagged ambiguous; a frame with no pose is missed, not wrong."""
     cam = Camera.from_fov(640, 480, 60.0)
     v = random_view(np.random.default_rng(3), cam, altitude=(4.0, 4.0), snr_db=None, lighting=False)
     tally = Tally()
-    for off_pct in (2.0, WRONG_POSE_PCT - 0.5, WRONG_POSE_PCT + 0.5, 30.0):
+    for off_pct, ambiguous in ((2.0, False), (WRONG_POSE_PCT - 0.5, False),
+                               (WRONG_POSE_PCT + 0.5, True), (30.0, False)):  # fmt: skip
         shift = np.array([off_pct / 100 * v.altitude_m, 0.0, 0.0])
-        tally.score(True, Pose(v.position_m + shift, v.R_pad_cam, 0.1, False), v, False)
+        tally.score(True, Pose(v.position_m + shift, v.R_pad_cam, 0.1, False, ambiguous), v, False)
     tally.score(False, None, v, False)
     s = tally.summary()
     assert s["wrong_pose_rate"] == pytest.approx(2 / 5)
+    assert s["silent_wrong_pose_rate"] == pytest.approx(1 / 5)  # (not flagged ambiguous)
     assert s["detection_rate"] == pytest.approx(4 / 5)
 
 
@@ -109,7 +111,7 @@ def test_altitude_sweep_json_and_plot(tmp_path) -> None:
     for det in ("visland", "aruco", "apriltag"):
         assert set(first[det]) == {
             "detection_rate", "position_error_pct", "rotation_error_deg", "wrong_pose_rate",
-            "false_positive_rate", "ms_per_frame",
+            "silent_wrong_pose_rate", "false_positive_rate", "ms_per_frame",
         }  # fmt: skip
     # At 1 m every detector sees its marker or pad, right, and nothing on the empty floor.
     for det in ("visland", "aruco", "apriltag"):
