@@ -33,7 +33,8 @@ def _views(j: int):
 def test_a_far_hairline_h_is_not_the_pad(j: int) -> None:
     pad, empty, view, hint = _views(j)
     reference = design_reference("grass_paint")
-    assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected
+    seen = process_frame(empty, reference, CAM, gravity_hint=hint)
+    assert not seen.detected and "H-shaped mark" in seen.reason  # (located, and refused)
     res = process_frame(pad, reference, CAM, gravity_hint=hint)
     if res.detected:  # (the pad itself, posed right or as its twin (symmetric), or nothing)
         assert res.pose is not None
