@@ -36,6 +36,7 @@ import numpy as np
 from pipeline.homography_fit import affine_part, apply_h, fit_homography, span_of
 from pipeline.jit import compiled
 from pipeline.measure import pad_box_m
+from pipeline.pose import quarter_turn
 from pipeline.reference import Reference
 from pipeline.shapes import Region
 from pipeline.template import pad_pattern, pattern_box
@@ -438,13 +439,11 @@ def _turn_untold(levels: np.ndarray, reference: Reference, H: np.ndarray) -> boo
     well as ``H`` (within ``QUARTER_MARGIN``): so small, the H does not tell which of
     its board's turns is the pad's (nor, with it, where the camera is over the pad)."""
     own = _h_pattern(levels, reference, H)
-    cx, cy = pad_box_m(reference).mean(axis=0)
-    for sign in (1.0, -1.0):
-        # (pad metres turned a quarter round about the pad's centre)
-        quarter = np.array([[0.0, -sign, cx + sign * cy], [sign, 0.0, cy - sign * cx], [0, 0, 1.0]])
-        if not _h_pattern(levels, reference, H @ quarter) < own - QUARTER_MARGIN:
-            return True
-    return False
+    centre = pad_box_m(reference).mean(axis=0)
+    return any(
+        not _h_pattern(levels, reference, H @ quarter_turn(centre, sign)) < own - QUARTER_MARGIN
+        for sign in (1.0, -1.0)
+    )
 
 
 def _board_outlines(reference: Reference) -> list[np.ndarray]:

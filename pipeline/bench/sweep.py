@@ -9,9 +9,8 @@ detector and point: detection rate, position error (% of altitude) and rotation
 error (degrees) against the truth, the share of frames posed over
 ``tally.WRONG_POSE_PCT`` off (something else taken for the pad, or the planar pose's
 other solution) and of those not flagged ambiguous, the share of empty twins where
-something was found, and
-milliseconds per frame (on the frames with the pad); the frames go to each detector
-at their native resolution (60 degree HFOV).
+something was found, and milliseconds per frame (on the frames with the pad); the
+frames go to each detector at their native resolution (60 degree HFOV).
 
 - ``altitude``: 1 m to the altitude where the pad spans 12 px (for the 0.55 m pad:
   ~25 m at 640x480, ~51 m at 1280x720, ~76 m at 1920x1080; other pads scaled with
