@@ -20,23 +20,27 @@ them, and the picture inside matches the reference's, the H telling which of the
 board's turns is the pad's.
 
 Only a pad whose picture is its board (every border pixel of the reference the
-same level: `Reference.board_is_outline`) is looked for so.
+same level: `Reference.board_is_outline`) is looked for so, or a round one (a disc on
+its floor: `Reference.rim_disc`). A disc seen at a slant is an ellipse, whatever its
+turn: the pad is fitted from a dozen turns of it, and turned to where its H's pattern
+matches best, the H alone telling its turn.
 """
 
 from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
-from pipeline.homography_fit import affine_part, apply_h, fit_homography, span_of
+from pipeline.edgefit import EdgeModel
+from pipeline.homography_fit import affine_part, apply_h, fit_homography, span_of, support
 from pipeline.jit import compiled
 from pipeline.measure import pad_box_m
-from pipeline.pose import quarter_turn
+from pipeline.pose import quarter_turn, turn_about
 from pipeline.reference import Reference
 from pipeline.shapes import Region
 from pipeline.template import pad_pattern, pattern_box
@@ -87,6 +91,11 @@ MIN_BOARD_SUPPORT = 0.2
 MIN_BOARD_SHARE = 0.3  # of the quadrilateral, at the board's level (not the mark's)
 _QUAD_EPS = 0.06  # Douglas-Peucker tolerance, of the hull's perimeter
 _FILL = (0.75, 1.25)  # the grown board's area over its quadrilateral's
+_ROUND_FILL = (0.85, 1.15)  # ... over its ellipse's
+_ROUND_TOL = 0.12  # 90 % of a round board's outline lies this near its ellipse (of its radius)
+DISC_TURNS = 12  # a round board's pad fitted from this many turns (each 15 degrees near)
+DISC_TURN_REACH = 16.0  # ... then turned to its H's pattern, this far either way at most
+_CHROMA_MARGIN = 8  # pixels of the view around a board's outline read on its chroma
 _CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
 _NEAR, _CORE = np.ones((5, 5), np.uint8), np.ones((9, 9), np.uint8)  # the rings' reach
 
@@ -106,15 +115,19 @@ def find_boards(
     reference: Reference,
     enlarged: float,
     holes: Sequence[Region] = (),
+    chroma: Callable[[tuple[int, int, int, int]], np.ndarray] | None = None,
 ) -> list[np.ndarray]:
     """Homographies (pad metres -> view pixels) of the pads found by their boards,
     best pattern first, on a view's smoothed channel (``levels``), around its
     regions of the H's polarity (``shapes``, `pipeline.find.search`'s) and where
     the threshold left a board whole, a hole of its mask (``holes``); ``enlarged``:
-    view pixels per frame pixel."""
-    if not reference.board_is_outline:
+    view pixels per frame pixel; ``chroma``: the view's box (x0, y0, x1, y1) read on the
+    board's chroma (`pipeline.colour.chroma_levels`), made when asked for."""
+    disc = reference.rim_disc
+    if not reference.board_is_outline and disc is None:
         return []
-    ratio = reference.pad_over_h
+    # (a disc's picture may hold some floor around it: the disc is the board)
+    ratio = reference.pad_over_h if disc is None else 2.0 * disc[1] / reference.h_size_m
     # The marks of the H's polarity small enough for their H to be missed, and large
     # enough for a board the size of MIN_BOARD_PX around them; on a textured floor
     # (a thousand of them) the largest first, MAX_SEEDS of them. Then the largest
@@ -137,11 +150,11 @@ def find_boards(
     grown = [
         board
         for seed in small[:MAX_SEEDS] + large[:MAX_LARGE_SEEDS]
-        for board in _grow_boards(levels, seed, ratio, least_board)
+        for board in _grow_boards(levels, seed, ratio, least_board, round_board=disc is not None)
     ]
     whole = [
         _board_of_hole(levels, hole, least_board, widest * ratio)
-        for hole in sorted(holes, key=lambda r: -r.area)
+        for hole in (sorted(holes, key=lambda r: -r.area) if disc is None else [])
     ]
     boards: list[Board] = []
     for board in grown + [b for b in whole if b is not None]:
@@ -151,16 +164,24 @@ def find_boards(
     found = []
     edges = _board_outlines(reference)
     for board in boards[:MAX_BOARDS]:
-        fitted = _fit_board(levels, reference, board.quad, edges, enlarged)
+        if disc is None:
+            starts = _quad_starts(board.quad, edges)
+        else:
+            starts = _disc_starts(board.quad, reference, *disc)
+        fitted = _fit_board(
+            levels, reference, starts, enlarged, round_board=disc is not None, chroma=chroma
+        )
         if fitted is not None:
             found.append(fitted)
     found.sort(key=lambda f: -f[0])
     return [H for _, H in found]
 
 
-def _grow_boards(levels: np.ndarray, mark: Region, ratio: float, min_px: float) -> list[Board]:
+def _grow_boards(
+    levels: np.ndarray, mark: Region, ratio: float, min_px: float, *, round_board: bool = False
+) -> list[Board]:
     """The board around a mark, grown two ways, where it is a quadrilateral the pad's
-    size for the mark.
+    size for the mark (an ellipse, for a ``round_board``: see `_board_ellipse`).
 
     Between a light H and a dark board (or the reverse) the blur crosses the floor's
     level, so the board is not simply the pixels off the floor's level. It is grown
@@ -200,7 +221,8 @@ def _grow_boards(levels: np.ndarray, mark: Region, ratio: float, min_px: float) 
             part = _part_with(grown | near | seed, seed, fill=True)
         else:
             part = _part_with(grown | seed, near, fill=False)
-        quad = _board_quad(part, seed, size, ratio, min_px)
+        shape_of = _board_ellipse if round_board else _board_quad
+        quad = shape_of(part, seed, size, ratio, min_px)
         if quad is not None:
             boards.append(Board(quad + np.array([x0, y0], np.float64), contrast))
     return boards
@@ -371,12 +393,51 @@ def _board_quad(
     return _clockwise(quad)
 
 
+def _board_ellipse(
+    part: np.ndarray, seed: np.ndarray, size: float, ratio: float, min_px: float
+) -> np.ndarray | None:
+    """The rectangle around the grown board's ellipse (window pixels, clockwise), when
+    the board is one, inside the window, the pad's size for a mark of ``size``."""
+    if part[0].any() or part[-1].any() or part[:, 0].any() or part[:, -1].any():
+        return None  # it runs into the floor: no board's edge all round
+    outlines, _ = cv2.findContours(part, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    outline = max(outlines, key=cv2.contourArea)
+    if len(outline) < 5:
+        return None
+    (cx, cy), (w, h), angle = cv2.fitEllipse(outline)
+    area = math.pi * w * h / 4.0
+    if min(w, h) <= 0.0 or not _ROUND_FILL[0] <= cv2.contourArea(outline) / area <= _ROUND_FILL[1]:
+        return None
+    t = math.radians(angle)
+    u = np.array([math.cos(t), math.sin(t)])
+    v = np.array([-math.sin(t), math.cos(t)])
+    # Its outline on the ellipse: a square's corners stand 19 % beyond the ellipse
+    # fitted to it, its sides' middles 15 % within.
+    off = outline.reshape(-1, 2) - [cx, cy]
+    radii = np.hypot(off @ u / (w / 2.0), off @ v / (h / 2.0))
+    if float(np.percentile(np.abs(radii - 1.0), 90)) > _ROUND_TOL:
+        return None
+    if np.count_nonzero(part & (1 - seed)) / area < MIN_BOARD_SHARE:
+        return None
+    span = float(max(w, h))
+    if span < min_px or not _pad_sized(span, size, ratio):
+        return None
+    c, u, v = np.array([cx, cy]), u * w / 2.0, v * h / 2.0
+    return _clockwise(np.array([c - u - v, c + u - v, c + u + v, c - u + v]))
+
+
 def _quad_of(outline: np.ndarray) -> np.ndarray | None:
     """The quadrilateral (4 x 2, float) that an outline's (N x 1 x 2 int32) convex hull
     makes, or None when it makes none."""
     hull = cv2.convexHull(outline)
     quad = cv2.approxPolyDP(hull, _QUAD_EPS * cv2.arcLength(hull, True), True)
     return quad.reshape(4, 2).astype(np.float64) if len(quad) == 4 else None
+
+
+def _shoelace(poly: np.ndarray) -> float:
+    """A polygon's signed area (positive: clockwise on screen, y down)."""
+    x, y = poly[:, 0], poly[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
 
 
 def _area(quad: np.ndarray) -> float:
@@ -390,32 +451,69 @@ def _pad_sized(span: float, mark: float, ratio: float) -> bool:
     return 0.5 * ratio * mark <= span <= 2.0 * ratio * mark
 
 
+def _quad_starts(quad: np.ndarray, edges: list[np.ndarray]) -> list[np.ndarray]:
+    """The pad put on a quadrilateral board (view pixels, clockwise) in each of its four
+    turns, taken for each of the board's ``edges`` (`_board_outlines`)."""
+    return [
+        cv2.getPerspectiveTransform(
+            edge.astype(np.float32), np.roll(quad, -turn, axis=0).astype(np.float32)
+        ).astype(np.float64)
+        for edge, turn in itertools.product(edges, range(4))
+    ]
+
+
+def _disc_starts(
+    quad: np.ndarray, reference: Reference, centre_m: np.ndarray, radius_m: float
+) -> list[np.ndarray]:
+    """The pad put on a round board (``quad``: the rectangle around its ellipse, view
+    pixels, clockwise) at each of ``DISC_TURNS`` turns: a circle seen at a slant is an
+    ellipse, the same at every turn of the pad about its centre."""
+    # The ellipse's half axes, its points centre + a cos t + b sin t.
+    A = np.column_stack([(quad[1] - quad[0]) / 2.0, (quad[2] - quad[1]) / 2.0])
+    # (the pad's box comes out clockwise on screen, as a square board's does)
+    if np.sign(np.linalg.det(A)) != np.sign(_shoelace(pad_box_m(reference))):
+        A = A @ np.diag([1.0, -1.0])
+    starts = []
+    for k in range(DISC_TURNS):
+        t = 2.0 * math.pi * k / DISC_TURNS
+        turn = np.array([[math.cos(t), -math.sin(t)], [math.sin(t), math.cos(t)]])
+        M = A @ turn / radius_m
+        H = np.eye(3)
+        H[:2, :2] = M
+        H[:2, 2] = quad.mean(axis=0) - M @ centre_m
+        starts.append(H)
+    return starts
+
+
 def _fit_board(
     levels: np.ndarray,
     reference: Reference,
-    quad: np.ndarray,
-    edges: list[np.ndarray],
+    starts: list[np.ndarray],
     enlarged: float = 1.0,
+    *,
+    round_board: bool = False,
+    chroma: Callable[[tuple[int, int, int, int]], np.ndarray] | None = None,
 ) -> tuple[float, np.ndarray] | None:
-    """The pad fitted from the quadrilateral in each of its four turns, taken for each
-    of the board's ``edges`` (`_board_outlines`): the best pattern's (NCC, homography),
-    when it is the pad's (``enlarged``: view pixels per frame pixel)."""
+    """The pad fitted from each of the board's ``starts`` (homographies, pad metres ->
+    view pixels): the best pattern's (NCC, homography), when it is the pad's
+    (``enlarged``: view pixels per frame pixel); on a ``round_board``, turned to its
+    H's pattern (`_turned_to_pattern`). Its outline may be found on the board's ``chroma``
+    (see `find_boards`) where the channel hardly shows it."""
     box = pad_box_m(reference)
     h_sides = np.arange(len(reference.edge_model.polygon)) < len(reference.corners_m)
     outline = _outline_sides(reference)
     best: tuple[float, np.ndarray] | None = None
-    for board_edge, turn in itertools.product(edges, range(4)):
-        turned = np.roll(quad, -turn, axis=0)
-        start = cv2.getPerspectiveTransform(
-            board_edge.astype(np.float32), turned.astype(np.float32)
-        )
+    for start in starts:
         fit = fit_homography(
-            levels, reference.edge_model, start.astype(np.float64), iterations=3, search_px=3.0,
-            sides_alike=False,
-        )  # fmt: skip
+            levels, reference.edge_model, start, iterations=3, search_px=3.0, sides_alike=False
+        )
         if fit is None:
             continue
-        if outline is not None and _found_share(fit.side_found[outline]) < MIN_OUTLINE_FOUND:
+        if (
+            outline is not None
+            and _found_share(fit.side_found[outline]) < MIN_OUTLINE_FOUND
+            and not _outline_in_chroma(chroma, reference, fit.H)
+        ):
             continue
         # So small a pad shows no perspective: the fit's is its noise, which skewed
         # the pose by up to 40 % of the altitude. Its affine part is kept.
@@ -429,9 +527,27 @@ def _fit_board(
         bar = MIN_FINE_H_NCC if stroke < FINE_STROKE_PX else MIN_H_NCC
         if (sides or _h_pattern(levels, reference, H) >= bar) and (best is None or ncc > best[0]):
             best = (ncc, H)
+    if best is not None and round_board:
+        best = (best[0], _turned_to_pattern(levels, reference, best[1]))
     if best is not None and _turn_untold(levels, reference, best[1]):
         return None
     return best
+
+
+def _turned_to_pattern(levels: np.ndarray, reference: Reference, H: np.ndarray) -> np.ndarray:
+    """``H`` turned about the H's centre to where the H's pattern matches best (within
+    ``DISC_TURN_REACH`` degrees, to a degree): on a round board only the H tells the
+    pad's turn, and so small its edges hardly do (orange_ring's far poses came 5-12
+    degrees off, by up to 14 % of the altitude, where a turn of 8-16 matched better)."""
+    centre = reference.h_centre_m
+    best, score = 0.0, _h_pattern(levels, reference, H)
+    for step in (4.0, 2.0, 1.0):
+        reach = DISC_TURN_REACH if step == 4.0 else step
+        for deg in np.arange(best - reach, best + reach + 1e-9, step):
+            ncc = _h_pattern(levels, reference, H @ turn_about(centre, float(deg)))
+            if ncc > score:  # (nan, too little in view, never wins)
+                best, score = float(deg), ncc
+    return H @ turn_about(centre, best)
 
 
 def _turn_untold(levels: np.ndarray, reference: Reference, H: np.ndarray) -> bool:
@@ -485,13 +601,47 @@ def _h_pattern(levels: np.ndarray, reference: Reference, H: np.ndarray) -> float
 
 
 def _outline_sides(reference: Reference) -> np.ndarray | None:
-    """Which of the pad's sides are its board's outline (its outermost mark's, of those
-    not faint: on the enlarged far view their edges are lost), or None when the
-    reference found no such mark around its H."""
+    """Which of the pad's sides are its board's outline (`_outline_mark`'s), or None
+    when the reference found no such mark around its H."""
+    k = _outline_mark(reference)
+    return None if k is None else reference.edge_model.polygon == 1 + k
+
+
+def _outline_mark(reference: Reference) -> int | None:
+    """The board's outline among the reference's marks: its outermost (of those not
+    faint: on the enlarged far view their edges are lost), or None when it has none."""
     spans = [-1.0 if m.faint else float(np.ptp(m.corners_m, axis=0).max()) for m in reference.marks]
     if not spans or max(spans) < 0:
         return None
-    return reference.edge_model.polygon == 1 + int(np.argmax(spans))
+    return int(np.argmax(spans))
+
+
+def _outline_in_chroma(
+    chroma: Callable[[tuple[int, int, int, int]], np.ndarray] | None,
+    reference: Reference,
+    H: np.ndarray,
+) -> bool:
+    """Whether the board's outline is found (``MIN_OUTLINE_FOUND`` of it) where ``H``
+    puts it on the board's chroma (bright inside the board; see `find_boards`): on grass,
+    thin's blue board stepped 20-25 levels on its H's channel against a noise of 6-14,
+    and none of its outline was found where, 8.7-10.9 m away, its faint H was refused;
+    on its chroma it steps some 60."""
+    k = _outline_mark(reference)
+    if chroma is None or k is None:
+        return False
+    corners = reference.marks[k].corners_m
+    px = apply_h(H, corners)
+    if not np.isfinite(px).all():
+        return False
+    x0, y0 = np.floor(px.min(axis=0)).astype(int) - _CHROMA_MARGIN
+    x1, y1 = np.ceil(px.max(axis=0)).astype(int) + _CHROMA_MARGIN
+    x0, y0 = max(int(x0), 0), max(int(y0), 0)
+    levels = chroma((x0, y0, int(x1), int(y1)))
+    if min(levels.shape) < 2 * _CHROMA_MARGIN:
+        return False
+    shift = np.array([[1.0, 0.0, -x0], [0.0, 1.0, -y0], [0.0, 0.0, 1.0]])
+    model = EdgeModel.from_polygons([(corners, True)])
+    return support(levels, model, shift @ H) >= MIN_OUTLINE_FOUND
 
 
 def _found_share(found: np.ndarray) -> float:

@@ -36,6 +36,7 @@ import numpy as np
 from pipeline.board_search import MIN_BOARD_PX, MIN_BOARD_SUPPORT, find_boards
 from pipeline.camera import Camera
 from pipeline.candidates import MIN_EVIDENCE, fit_h_sides
+from pipeline.colour import chroma_levels
 from pipeline.find import (
     FIRST_LOOK_MIN_SPAN_PX,
     CandidateVerifier,
@@ -55,6 +56,7 @@ from pipeline.preprocess import (
     Binarized,
     Halvings,
     check_image,
+    has_colour,
     smooth,
     smooth_channel,
     to_channel,
@@ -269,7 +271,14 @@ def process_frame(
         far_binary, shapes = far_found
         to_frame = far.to_frame
         holes = far_holes + _holes_in(far, search_view, working_holes)
-        for H in find_boards(far_binary.smooth, shapes, reference, max(1.0, far.scale), holes):
+        chroma = None  # (a grey frame shows none)
+        picture = pictures[far][0]
+        if reference.board_chroma is not None and has_colour(picture):
+            chroma = functools.partial(_chroma_of, picture, reference.board_chroma)
+        boards = find_boards(
+            far_binary.smooth, shapes, reference, max(1.0, far.scale), holes, chroma
+        )
+        for H in boards:
             if verifier is not None:
                 # The verifier judges the H the board puts where it is, as any H.
                 h_px = apply_h(H, reference.corners_m)
@@ -287,6 +296,14 @@ def process_frame(
                 )
         stages.lap("board")
     return _nothing(stages.timings, t_start, tally.reason(reference.polarity), mask)
+
+
+def _chroma_of(
+    picture: np.ndarray, weights: np.ndarray, box: tuple[int, int, int, int]
+) -> np.ndarray:
+    """The box (x0, y0, x1, y1) of a view's picture read on a board's chroma."""
+    x0, y0, x1, y1 = box
+    return chroma_levels(picture[y0:y1, x0:x1], weights)
 
 
 def _holes_in(far: View, view: View, holes: list[Region]) -> list[Region]:

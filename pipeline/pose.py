@@ -112,6 +112,19 @@ def quarter_turn(centre_m: np.ndarray, sign: float) -> np.ndarray:
     return np.array([[0.0, -sign, cx + sign * cy], [sign, 0.0, cy - sign * cx], [0.0, 0.0, 1.0]])
 
 
+def turn_about(centre_m: np.ndarray, deg: float) -> np.ndarray:
+    """The turn of the pad plane by ``deg`` degrees counter-clockwise about ``centre_m``
+    (x, y metres), as a 3 x 3 homography of pad metres.
+
+    >>> np.round(turn_about(np.array([1.0, 0.0]), 90.0) @ [2.0, 0.0, 1.0], 9) + 0.0
+    array([1., 1., 1.])
+    """
+    t = math.radians(float(deg))
+    c, s = math.cos(t), math.sin(t)
+    cx, cy = (float(v) for v in np.asarray(centre_m, np.float64).reshape(2))
+    return np.array([[c, -s, cx - c * cx + s * cy], [s, c, cy - s * cx - c * cy], [0.0, 0.0, 1.0]])
+
+
 def turned(pose: Pose, centre_m: np.ndarray | None = None) -> Pose:
     """The pose's twin for a pad (or an H centred at ``centre_m`` on it, default the
     pad's centre) that looks the same after a 180 degree turn about that centre."""

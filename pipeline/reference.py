@@ -58,6 +58,8 @@ _MAX_CUT_SHAPES = 32  # shapes cut by the picture's edge kept to tell of a cut H
 # 0.00-0.03 of it, a ring the H's legs cross 0.30. Frames show the two as one shape,
 # no H's: such a pad was found from afar by its board alone, never within 4 m of it.
 _MAX_BEYOND_H = 0.15
+_ROUND_TOL = 0.03  # a rim whose vertices lie this near (of its radius) one circle is one
+MIN_BOARD_CHROMA = 20.0  # a board this far (BGR levels) from the grey of its lightness has a colour
 _MAX_TOUCH_LOOKS = 8  # shapes not an H opened (thin marks cut off) to tell of a touching H
 # Nor may another mark of its paint (this share of the H's area at least, not a serif)
 # lie nearer the H than this share of the picture's width: a frame at gaps of 0.4 and 0.6 %
@@ -199,6 +201,37 @@ class Reference:
         ch = self.channel.astype(np.float32)
         border = border_pixels(ch, max(2, min(ch.shape) // 50))
         return float(border.std()) <= _BOARD_UNIFORMITY * self.contrast
+
+    @cached_property
+    def rim_disc(self) -> tuple[np.ndarray, float] | None:
+        """The board's rim when it is a circle around the H (a disc on its floor, a
+        round pad): its centre and radius (metres), which tell a far pad as a square
+        board's outline does (`pipeline.board_search`); else None."""
+        rims = [m for m in self.marks if m.rim and not m.faint and len(m.corners_m) >= 16]
+        if not rims:
+            return None
+        pts = max(rims, key=lambda m: float(np.ptp(m.corners_m, axis=0).prod())).corners_m
+        centre = pts.mean(axis=0)
+        radii = np.hypot(*(pts - centre).T)
+        radius = float(radii.mean())
+        if float(np.abs(radii - radius).max()) > _ROUND_TOL * radius:
+            return None
+        if float(np.hypot(*(self.corners_m - centre).T).max()) >= radius:
+            return None  # (the H reaches past it: no rim around the H)
+        return centre, radius
+
+    @cached_property
+    def board_chroma(self) -> np.ndarray | None:
+        """The board's own colour apart from its lightness: the unit BGR weights of its
+        chroma (summing to 0, so that a grey of any lightness reads 0 on them and the
+        board its chroma's size), when it has one (``MIN_BOARD_CHROMA``); None for a
+        grey or white board, whose rim only lightness tells. A blue board on grass
+        stands out there, where on the H's channel (white against blue: the blue dark,
+        the grass no lighter) it barely steps (`pipeline.colour.chroma_levels`)."""
+        board = np.asarray(self.board_bgr, np.float64)
+        chroma = board - board.mean()
+        size = float(np.linalg.norm(chroma))
+        return None if size < MIN_BOARD_CHROMA else chroma / size
 
     @property
     def outline_share(self) -> float | None:

@@ -26,6 +26,7 @@ from pipeline.board_search import (
     _fit_board,
     _floor_and_noise,
     _outline_sides,
+    _quad_starts,
     _ring_contrast,
     find_boards,
 )
@@ -363,7 +364,7 @@ def test_a_board_grown_to_an_inset_border_is_fitted_as_that_border():
     truth = K @ np.column_stack([R.T[:, 0], R.T[:, 1], -R.T @ position])
     for outline in (outlines[0], inner):
         quad = apply_h(truth, outline)
-        fitted = _fit_board(levels, reference, _clockwise(quad), outlines)
+        fitted = _fit_board(levels, reference, _quad_starts(_clockwise(quad), outlines))
         assert fitted is not None
         span = np.ptp(apply_h(fitted[1], reference.corners_m), axis=0)
         want = np.ptp(apply_h(truth, reference.corners_m), axis=0)
