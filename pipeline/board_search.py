@@ -20,10 +20,11 @@ them, and the picture inside matches the reference's, the H telling which of the
 board's turns is the pad's.
 
 Only a pad whose picture is its board (every border pixel of the reference the
-same level: `Reference.board_is_outline`) is looked for so, or a round one (a disc on
-its floor: `Reference.rim_disc`). A disc seen at a slant is an ellipse, whatever its
-turn: the pad is fitted from a dozen turns of it, and turned to where its H's pattern
-matches best, the H alone telling its turn.
+same level: `Reference.board_is_outline`) is looked for so, or one whose H's board is
+round (a disc on its floor, an octagon printed on a sheet, the disc a ring holds:
+`Reference.round_board`). A circle seen at a slant is an ellipse, whatever its turn: the
+pad is fitted from a dozen turns of it, and turned to where its H's pattern matches
+best, the H alone telling its turn.
 """
 
 from __future__ import annotations
@@ -103,10 +104,12 @@ _NEAR, _CORE = np.ones((5, 5), np.uint8), np.ones((9, 9), np.uint8)  # the rings
 @dataclass(frozen=True)
 class Board:
     """A quadrilateral (view pixels, 4 x 2, clockwise on screen) and how far its
-    level stands from the floor's."""
+    level stands from the floor's; for a ``round`` board, the rectangle around its
+    ellipse."""
 
     quad: np.ndarray
     contrast: float
+    round: bool = False
 
 
 def find_boards(
@@ -123,11 +126,14 @@ def find_boards(
     the threshold left a board whole, a hole of its mask (``holes``); ``enlarged``:
     view pixels per frame pixel; ``chroma``: the view's box (x0, y0, x1, y1) read on the
     board's chroma (`pipeline.colour.chroma_levels`), made when asked for."""
-    disc = reference.rim_disc
-    if not reference.board_is_outline and disc is None:
+    rounded = reference.round_board
+    if not reference.board_is_outline and rounded is None:
         return []
-    # (a disc's picture may hold some floor around it: the disc is the board)
-    ratio = reference.pad_over_h if disc is None else 2.0 * disc[1] / reference.h_size_m
+    # How far around a mark the size of the H each board reaches: the pad's outline, the
+    # round board's.
+    ratio = reference.pad_over_h if reference.board_is_outline else None
+    round_ratio = None if rounded is None else 2.0 * rounded.radius_m / reference.h_size_m
+    ratios = [r for r in (ratio, round_ratio) if r is not None]
     # The marks of the H's polarity small enough for their H to be missed, and large
     # enough for a board the size of MIN_BOARD_PX around them; on a textured floor
     # (a thousand of them) the largest first, MAX_SEEDS of them. Then the largest
@@ -135,8 +141,8 @@ def find_boards(
     # (on the real-world mix's views a glare on the H, or a smear joining it to the
     # bars beside it, lost 1-4 of 40 pads per design whose board stood out whole).
     most = MISSED_H_PX * enlarged
-    least = max(MIN_SEED_PX, MIN_BOARD_PX * enlarged / (2.0 * ratio))
-    widest = min(levels.shape) / (1.5 * ratio)
+    least = max(MIN_SEED_PX, MIN_BOARD_PX * enlarged / (2.0 * max(ratios)))
+    widest = min(levels.shape) / (1.5 * min(ratios))
     small, large = [], []
     for region in shapes:
         size = region.span
@@ -150,26 +156,27 @@ def find_boards(
     grown = [
         board
         for seed in small[:MAX_SEEDS] + large[:MAX_LARGE_SEEDS]
-        for board in _grow_boards(levels, seed, ratio, least_board, round_board=disc is not None)
+        for board in _grow_boards(levels, seed, ratio, least_board, round_ratio=round_ratio)
     ]
-    whole = [
+    whole = [] if ratio is None else [
         _board_of_hole(levels, hole, least_board, widest * ratio)
-        for hole in (sorted(holes, key=lambda r: -r.area) if disc is None else [])
-    ]
+        for hole in sorted(holes, key=lambda r: -r.area)
+    ]  # fmt: skip
     boards: list[Board] = []
     for board in grown + [b for b in whole if b is not None]:
-        if not any(_same(board.quad, b.quad) for b in boards):
+        if not any(b.round == board.round and _same(board.quad, b.quad) for b in boards):
             boards.append(board)
     boards.sort(key=lambda b: -b.contrast)
     found = []
     edges = _board_outlines(reference)
     for board in boards[:MAX_BOARDS]:
-        if disc is None:
-            starts = _quad_starts(board.quad, edges)
+        if board.round and rounded is not None:
+            starts = _disc_starts(board.quad, reference, rounded.centre_m, rounded.radius_m)
+            outline = rounded.mark
         else:
-            starts = _disc_starts(board.quad, reference, *disc)
+            starts, outline = _quad_starts(board.quad, edges), _outline_mark(reference)
         fitted = _fit_board(
-            levels, reference, starts, enlarged, round_board=disc is not None, chroma=chroma
+            levels, reference, starts, outline, enlarged, round_board=board.round, chroma=chroma
         )
         if fitted is not None:
             found.append(fitted)
@@ -178,10 +185,17 @@ def find_boards(
 
 
 def _grow_boards(
-    levels: np.ndarray, mark: Region, ratio: float, min_px: float, *, round_board: bool = False
+    levels: np.ndarray,
+    mark: Region,
+    ratio: float | None,
+    min_px: float,
+    *,
+    round_ratio: float | None = None,
 ) -> list[Board]:
     """The board around a mark, grown two ways, where it is a quadrilateral the pad's
-    size for the mark (an ellipse, for a ``round_board``: see `_board_ellipse`).
+    size for the mark (``ratio``: the pad's width over the H's; None: no square board)
+    or an ellipse the round board's (``round_ratio``: its width over the H's; see
+    `_board_ellipse`).
 
     Between a light H and a dark board (or the reverse) the blur crosses the floor's
     level, so the board is not simply the pixels off the floor's level. It is grown
@@ -195,7 +209,7 @@ def _grow_boards(
     if size < MIN_SEED_PX:
         return []
     # A window with room for the whole pad around its H, and some floor.
-    half = int(0.75 * ratio * size) + 4
+    half = int(0.75 * max(r for r in (ratio, round_ratio) if r is not None) * size) + 4
     cx, cy = (2 * x + w - 1) // 2, (2 * y + h - 1) // 2  # (the box's centre, floored)
     # (cut by the view's edge: a board that reaches it is refused as running into it)
     x0, y0 = max(cx - half, 0), max(cy - half, 0)
@@ -221,10 +235,15 @@ def _grow_boards(
             part = _part_with(grown | near | seed, seed, fill=True)
         else:
             part = _part_with(grown | seed, near, fill=False)
-        shape_of = _board_ellipse if round_board else _board_quad
-        quad = shape_of(part, seed, size, ratio, min_px)
+        at = np.array([x0, y0], np.float64)
+        quad = None if ratio is None else _board_quad(part, seed, size, ratio, min_px)
         if quad is not None:
-            boards.append(Board(quad + np.array([x0, y0], np.float64), contrast))
+            boards.append(Board(quad + at, contrast))
+        ellipse = (
+            None if round_ratio is None else _board_ellipse(part, seed, size, round_ratio, min_px)
+        )
+        if ellipse is not None:
+            boards.append(Board(ellipse + at, contrast, round=True))
     return boards
 
 
@@ -489,6 +508,7 @@ def _fit_board(
     levels: np.ndarray,
     reference: Reference,
     starts: list[np.ndarray],
+    outline_mark: int | None,
     enlarged: float = 1.0,
     *,
     round_board: bool = False,
@@ -497,11 +517,12 @@ def _fit_board(
     """The pad fitted from each of the board's ``starts`` (homographies, pad metres ->
     view pixels): the best pattern's (NCC, homography), when it is the pad's
     (``enlarged``: view pixels per frame pixel); on a ``round_board``, turned to its
-    H's pattern (`_turned_to_pattern`). Its outline may be found on the board's ``chroma``
-    (see `find_boards`) where the channel hardly shows it."""
+    H's pattern (`_turned_to_pattern`). Some of the board's outline (``outline_mark``,
+    of the reference's marks; None: it has none) must be found, on the channel or on
+    the board's ``chroma`` (see `find_boards`) where the channel hardly shows it."""
     box = pad_box_m(reference)
     h_sides = np.arange(len(reference.edge_model.polygon)) < len(reference.corners_m)
-    outline = _outline_sides(reference)
+    outline = None if outline_mark is None else reference.edge_model.polygon == 1 + outline_mark
     best: tuple[float, np.ndarray] | None = None
     for start in starts:
         fit = fit_homography(
@@ -512,7 +533,7 @@ def _fit_board(
         if (
             outline is not None
             and _found_share(fit.side_found[outline]) < MIN_OUTLINE_FOUND
-            and not _outline_in_chroma(chroma, reference, fit.H)
+            and not _outline_in_chroma(chroma, reference, fit.H, outline_mark)
         ):
             continue
         # So small a pad shows no perspective: the fit's is its noise, which skewed
@@ -600,13 +621,6 @@ def _h_pattern(levels: np.ndarray, reference: Reference, H: np.ndarray) -> float
     return pad_pattern(levels, reference.template_pyramid, reference.channel_px_per_m, around, H)
 
 
-def _outline_sides(reference: Reference) -> np.ndarray | None:
-    """Which of the pad's sides are its board's outline (`_outline_mark`'s), or None
-    when the reference found no such mark around its H."""
-    k = _outline_mark(reference)
-    return None if k is None else reference.edge_model.polygon == 1 + k
-
-
 def _outline_mark(reference: Reference) -> int | None:
     """The board's outline among the reference's marks: its outermost (of those not
     faint: on the enlarged far view their edges are lost), or None when it has none."""
@@ -620,13 +634,13 @@ def _outline_in_chroma(
     chroma: Callable[[tuple[int, int, int, int]], np.ndarray] | None,
     reference: Reference,
     H: np.ndarray,
+    k: int | None,
 ) -> bool:
-    """Whether the board's outline is found (``MIN_OUTLINE_FOUND`` of it) where ``H``
-    puts it on the board's chroma (bright inside the board; see `find_boards`): on grass,
-    thin's blue board stepped 20-25 levels on its H's channel against a noise of 6-14,
-    and none of its outline was found where, 8.7-10.9 m away, its faint H was refused;
-    on its chroma it steps some 60."""
-    k = _outline_mark(reference)
+    """Whether the board's outline (mark ``k``) is found (``MIN_OUTLINE_FOUND`` of it)
+    where ``H`` puts it on the board's chroma (bright inside the board; see
+    `find_boards`): on grass, thin's blue board stepped 20-25 levels on its H's channel
+    against a noise of 6-14, and none of its outline was found where, 8.7-10.9 m away,
+    its faint H was refused; on its chroma it steps some 60."""
     if chroma is None or k is None:
         return False
     corners = reference.marks[k].corners_m

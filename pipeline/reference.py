@@ -7,6 +7,7 @@ import heapq
 import math
 from dataclasses import dataclass
 from functools import cached_property
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -58,7 +59,7 @@ _MAX_CUT_SHAPES = 32  # shapes cut by the picture's edge kept to tell of a cut H
 # 0.00-0.03 of it, a ring the H's legs cross 0.30. Frames show the two as one shape,
 # no H's: such a pad was found from afar by its board alone, never within 4 m of it.
 _MAX_BEYOND_H = 0.15
-_ROUND_TOL = 0.03  # a rim whose vertices lie this near (of its radius) one circle is one
+_ROUND_TOL = 0.09  # a mark whose corners and sides lie this near (of its radius) a circle is round
 MIN_BOARD_CHROMA = 20.0  # a board this far (BGR levels) from the grey of its lightness has a colour
 _MAX_TOUCH_LOOKS = 8  # shapes not an H opened (thin marks cut off) to tell of a touching H
 # Nor may another mark of its paint (this share of the H's area at least, not a serif)
@@ -70,6 +71,15 @@ _MIN_CONTRAST = 25.0  # H against its board on the learned channel, 0..255
 # The picture's border is its board's edge when its levels spread this little (of the
 # contrast): 0.01-0.02 on square boards and sheets, 0.09-0.35 on discs and paint on grass.
 _BOARD_UNIFORMITY = 0.05
+
+
+class RoundBoard(NamedTuple):
+    """The H's board where it is round (`Reference.round_board`): its circle's centre
+    and radius (pad metres), and which of the reference's marks it is."""
+
+    centre_m: np.ndarray
+    radius_m: float
+    mark: int
 
 
 @dataclass(frozen=True, eq=False)
@@ -203,22 +213,29 @@ class Reference:
         return float(border.std()) <= _BOARD_UNIFORMITY * self.contrast
 
     @cached_property
-    def rim_disc(self) -> tuple[np.ndarray, float] | None:
-        """The board's rim when it is a circle around the H (a disc on its floor, a
-        round pad): its centre and radius (metres), which tell a far pad as a square
-        board's outline does (`pipeline.board_search`); else None."""
-        rims = [m for m in self.marks if m.rim and not m.faint and len(m.corners_m) >= 16]
-        if not rims:
-            return None
-        pts = max(rims, key=lambda m: float(np.ptp(m.corners_m, axis=0).prod())).corners_m
-        centre = pts.mean(axis=0)
-        radii = np.hypot(*(pts - centre).T)
-        radius = float(radii.mean())
-        if float(np.abs(radii - radius).max()) > _ROUND_TOL * radius:
-            return None
-        if float(np.hypot(*(self.corners_m - centre).T).max()) >= radius:
-            return None  # (the H reaches past it: no rim around the H)
-        return centre, radius
+    def round_board(self) -> RoundBoard | None:
+        """The H's board where it is round: the largest mark around the H that is a
+        circle (or near one: an octagon's sides bulge 8 % in from its corners) and
+        dark inside on the channel, as the H's board is (a disc's rim, an octagon
+        printed on paper, the disc a ring holds). From afar it shows as an ellipse,
+        which tells the pad as a square board's outline does (`pipeline.board_search`)."""
+        found = None
+        for k, mark in enumerate(self.marks):
+            pts = mark.corners_m
+            if mark.bright or mark.faint or len(pts) < 8:
+                continue
+            centre = pts.mean(axis=0)
+            # (the sides' middles too: a polygon's corners alone lie on its circle)
+            mids = 0.5 * (pts + np.roll(pts, -1, axis=0))
+            radii = np.hypot(*(np.vstack([pts, mids]) - centre).T)
+            radius = float(np.hypot(*(pts - centre).T).mean())
+            if float(np.abs(radii - radius).max()) > _ROUND_TOL * radius:
+                continue
+            if float(np.hypot(*(self.corners_m - centre).T).max()) >= radius:
+                continue  # (the H reaches past it: it is no board around the H)
+            if found is None or radius > found.radius_m:
+                found = RoundBoard(centre, radius, k)
+        return found
 
     @cached_property
     def board_chroma(self) -> np.ndarray | None:

@@ -25,7 +25,7 @@ from pipeline.board_search import (
     _clockwise,
     _fit_board,
     _floor_and_noise,
-    _outline_sides,
+    _outline_mark,
     _quad_starts,
     _ring_contrast,
     find_boards,
@@ -320,17 +320,15 @@ def test_a_faint_rim_is_not_the_outline_a_far_board_must_show():
     # is then judged as the pad without marks was, by its H and pattern.
     d = get_design("orange_ring")
     ref = Reference.from_image(d.draw().image, d.size_m)
-    outline = _outline_sides(ref)
-    assert outline is not None and outline.any()
     (rim,) = [k for k, m in enumerate(ref.marks) if m.rim]
+    assert _outline_mark(ref) == rim
     faint = dataclasses.replace(ref.marks[rim], faint=True)
     marks = tuple(faint if k == rim else m for k, m in enumerate(ref.marks))
-    dimmed = _outline_sides(dataclasses.replace(ref, marks=marks))
     widest = max(
         (k for k in range(len(marks)) if k != rim),
         key=lambda k: float(np.ptp(marks[k].corners_m, axis=0).max()),
     )
-    assert dimmed is not None and np.array_equal(dimmed, ref.edge_model.polygon == 1 + widest)
+    assert _outline_mark(dataclasses.replace(ref, marks=marks)) == widest
 
 
 def _inset_border_pad() -> np.ndarray:
@@ -364,7 +362,8 @@ def test_a_board_grown_to_an_inset_border_is_fitted_as_that_border():
     truth = K @ np.column_stack([R.T[:, 0], R.T[:, 1], -R.T @ position])
     for outline in (outlines[0], inner):
         quad = apply_h(truth, outline)
-        fitted = _fit_board(levels, reference, _quad_starts(_clockwise(quad), outlines))
+        starts = _quad_starts(_clockwise(quad), outlines)
+        fitted = _fit_board(levels, reference, starts, _outline_mark(reference))
         assert fitted is not None
         span = np.ptp(apply_h(fitted[1], reference.corners_m), axis=0)
         want = np.ptp(apply_h(truth, reference.corners_m), axis=0)

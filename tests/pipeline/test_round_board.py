@@ -1,4 +1,4 @@
-"""A far pad found by its round board (`pipeline.board_search`, a disc's rim).
+"""A far pad found by its round board (`pipeline.board_search`, `Reference.round_board`).
 
 From 18 m on a 640 x 480 frame orange_ring's H (white, in a white ring on an orange
 disc) spans some 12 px, blurred into its ring: no threshold parts the two, and the
@@ -22,18 +22,26 @@ from tests.pipeline.bench_support import design_reference, sweep_frames
 CAM = Camera.from_fov(640, 480, 60.0)
 
 
-@pytest.mark.parametrize(("design", "radius"), [("orange_ring", 0.535), ("red_on_black", 0.55)])
-def test_a_disc_pad_has_a_round_rim(design, radius):
-    disc = design_reference(design).rim_disc
-    assert disc is not None
-    centre, r = disc
-    assert r == pytest.approx(radius, abs=0.01)
-    assert np.abs(centre).max() < 0.02
+@pytest.mark.parametrize(
+    ("design", "radius"),
+    [
+        ("orange_ring", 0.535),  # its disc (the hem beyond)
+        ("red_on_black", 0.55),  # its disc
+        ("serif_octagon", 0.282),  # the octagon printed on its sheet
+        ("icao_circle", 2.005),  # the disc its ring holds
+        ("paper_ring", 0.131),  # the sheet inside its ring
+    ],
+)
+def test_an_h_on_a_round_board_has_one(design, radius):
+    board = design_reference(design).round_board
+    assert board is not None
+    assert board.radius_m == pytest.approx(radius, abs=0.01)
+    assert np.abs(board.centre_m).max() < 0.02
 
 
-@pytest.mark.parametrize("design", ["default", "serif_octagon", "grass_paint", "paper_ring"])
+@pytest.mark.parametrize("design", ["default", "icao", "dark_on_light", "thin", "grass_paint"])
 def test_square_boards_and_bare_hs_have_none(design):
-    assert design_reference(design).rim_disc is None
+    assert design_reference(design).round_board is None
 
 
 def test_an_ellipse_is_a_round_board_and_a_square_is_not():
