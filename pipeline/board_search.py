@@ -94,8 +94,8 @@ _QUAD_EPS = 0.06  # Douglas-Peucker tolerance, of the hull's perimeter
 _FILL = (0.75, 1.25)  # the grown board's area over its quadrilateral's
 _ROUND_FILL = (0.85, 1.15)  # ... over its ellipse's
 _ROUND_TOL = 0.12  # 90 % of a round board's outline lies this near its ellipse (of its radius)
-DISC_TURNS = 12  # a round board's pad fitted from this many turns (each 15 degrees near)
-DISC_TURN_REACH = 16.0  # ... then turned to its H's pattern, this far either way at most
+ROUND_TURNS = 12  # a round board's pad fitted from this many turns (each 15 degrees near)
+ROUND_TURN_REACH = 16.0  # ... then turned to its H's pattern, this far either way at most
 _CHROMA_MARGIN = 8  # pixels of the view around a board's outline read on its chroma
 _CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
 _NEAR, _CORE = np.ones((5, 5), np.uint8), np.ones((9, 9), np.uint8)  # the rings' reach
@@ -171,7 +171,7 @@ def find_boards(
     edges = _board_outlines(reference)
     for board in boards[:MAX_BOARDS]:
         if board.round and rounded is not None:
-            starts = _disc_starts(board.quad, reference, rounded.centre_m, rounded.radius_m)
+            starts = _round_starts(board.quad, reference, rounded.centre_m, rounded.radius_m)
             outline = rounded.mark
         else:
             starts, outline = _quad_starts(board.quad, edges), _outline_mark(reference)
@@ -416,7 +416,8 @@ def _board_ellipse(
     part: np.ndarray, seed: np.ndarray, size: float, ratio: float, min_px: float
 ) -> np.ndarray | None:
     """The rectangle around the grown board's ellipse (window pixels, clockwise), when
-    the board is one, inside the window, the pad's size for a mark of ``size``."""
+    the board is one, inside the window, the round board's size for a mark of ``size``
+    (``ratio``: its width over the H's)."""
     if part[0].any() or part[-1].any() or part[:, 0].any() or part[:, -1].any():
         return None  # it runs into the floor: no board's edge all round
     outlines, _ = cv2.findContours(part, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
@@ -481,20 +482,21 @@ def _quad_starts(quad: np.ndarray, edges: list[np.ndarray]) -> list[np.ndarray]:
     ]
 
 
-def _disc_starts(
+def _round_starts(
     quad: np.ndarray, reference: Reference, centre_m: np.ndarray, radius_m: float
 ) -> list[np.ndarray]:
     """The pad put on a round board (``quad``: the rectangle around its ellipse, view
-    pixels, clockwise) at each of ``DISC_TURNS`` turns: a circle seen at a slant is an
-    ellipse, the same at every turn of the pad about its centre."""
+    pixels, clockwise; its circle at ``centre_m``, ``radius_m``) at each of
+    ``ROUND_TURNS`` turns: a circle seen at a slant is an ellipse, the same at every
+    turn of the pad about its centre."""
     # The ellipse's half axes, its points centre + a cos t + b sin t.
     A = np.column_stack([(quad[1] - quad[0]) / 2.0, (quad[2] - quad[1]) / 2.0])
     # (the pad's box comes out clockwise on screen, as a square board's does)
     if np.sign(np.linalg.det(A)) != np.sign(_shoelace(pad_box_m(reference))):
         A = A @ np.diag([1.0, -1.0])
     starts = []
-    for k in range(DISC_TURNS):
-        t = 2.0 * math.pi * k / DISC_TURNS
+    for k in range(ROUND_TURNS):
+        t = 2.0 * math.pi * k / ROUND_TURNS
         turn = np.array([[math.cos(t), -math.sin(t)], [math.sin(t), math.cos(t)]])
         M = A @ turn / radius_m
         H = np.eye(3)
@@ -557,13 +559,13 @@ def _fit_board(
 
 def _turned_to_pattern(levels: np.ndarray, reference: Reference, H: np.ndarray) -> np.ndarray:
     """``H`` turned about the H's centre to where the H's pattern matches best (within
-    ``DISC_TURN_REACH`` degrees, to a degree): on a round board only the H tells the
+    ``ROUND_TURN_REACH`` degrees, to a degree): on a round board only the H tells the
     pad's turn, and so small its edges hardly do (orange_ring's far poses came 5-12
     degrees off, by up to 14 % of the altitude, where a turn of 8-16 matched better)."""
     centre = reference.h_centre_m
     best, score = 0.0, _h_pattern(levels, reference, H)
     for step in (4.0, 2.0, 1.0):
-        reach = DISC_TURN_REACH if step == 4.0 else step
+        reach = ROUND_TURN_REACH if step == 4.0 else step
         for deg in np.arange(best - reach, best + reach + 1e-9, step):
             ncc = _h_pattern(levels, reference, H @ turn_about(centre, float(deg)))
             if ncc > score:  # (nan, too little in view, never wins)
@@ -650,6 +652,8 @@ def _outline_in_chroma(
     x0, y0 = np.floor(px.min(axis=0)).astype(int) - _CHROMA_MARGIN
     x1, y1 = np.ceil(px.max(axis=0)).astype(int) + _CHROMA_MARGIN
     x0, y0 = max(int(x0), 0), max(int(y0), 0)
+    if x1 <= x0 or y1 <= y0:
+        return False  # (put off the view)
     levels = chroma((x0, y0, int(x1), int(y1)))
     if min(levels.shape) < 2 * _CHROMA_MARGIN:
         return False

@@ -151,6 +151,8 @@ def chroma_levels(image_bgr: np.ndarray, weights: np.ndarray) -> np.ndarray:
     >>> [round(float(v), 1) for v in chroma_levels(img, w)[4, [0, 7]]]
     [0.0, 141.4]
     """
+    if image_bgr.size == 0:  # (a box beyond the picture)
+        return np.zeros(image_bgr.shape[:2], np.float32)
     levels = cv2.transform(
         image_bgr.astype(np.float32), np.asarray(weights, np.float32).reshape(1, 3)
     )

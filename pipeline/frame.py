@@ -273,7 +273,7 @@ def process_frame(
         holes = far_holes + _holes_in(far, search_view, working_holes)
         chroma = None  # (a grey frame shows none)
         picture = pictures[far][0]
-        if reference.board_chroma is not None and has_colour(picture):
+        if reference.board_chroma is not None and picture.ndim == 3 and has_colour(picture):
             chroma = functools.partial(_chroma_of, picture, reference.board_chroma)
         boards = find_boards(
             far_binary.smooth, shapes, reference, max(1.0, far.scale), holes, chroma

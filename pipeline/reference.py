@@ -215,7 +215,7 @@ class Reference:
     @cached_property
     def round_board(self) -> RoundBoard | None:
         """The H's board where it is round: the largest mark around the H that is a
-        circle (or near one: an octagon's sides bulge 8 % in from its corners) and
+        circle (or near one: an octagon's sides' middles lie 8 % within its corners) and
         dark inside on the channel, as the H's board is (a disc's rim, an octagon
         printed on paper, the disc a ring holds). From afar it shows as an ellipse,
         which tells the pad as a square board's outline does (`pipeline.board_search`)."""

@@ -48,3 +48,4 @@ def test_a_far_blue_board_is_found_by_its_outline_on_its_chroma(j):
     # A grey frame shows no chroma: the board's outline is not found so there.
     grey = np.repeat(pad.mean(axis=2, keepdims=True).astype(np.uint8), 3, axis=2)
     assert process_frame(grey, reference, CAM, gravity_hint=hint).found_by != "board"
+    assert process_frame(grey[..., 0], reference, CAM, gravity_hint=hint).found_by != "board"
