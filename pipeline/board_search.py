@@ -29,6 +29,7 @@ best, the H alone telling its turn.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from collections.abc import Callable, Sequence
@@ -38,10 +39,11 @@ import cv2
 import numpy as np
 
 from pipeline.edgefit import EdgeModel
+from pipeline.edges import signed_area
 from pipeline.homography_fit import affine_part, apply_h, fit_homography, span_of, support
 from pipeline.jit import compiled
 from pipeline.measure import pad_box_m
-from pipeline.pose import quarter_turn, turn_about
+from pipeline.pose import turn_about
 from pipeline.reference import Reference
 from pipeline.shapes import Region
 from pipeline.template import pad_pattern, pattern_box
@@ -125,7 +127,7 @@ def find_boards(
     regions of the H's polarity (``shapes``, `pipeline.find.search`'s) and where
     the threshold left a board whole, a hole of its mask (``holes``); ``enlarged``:
     view pixels per frame pixel; ``chroma``: the view's box (x0, y0, x1, y1) read on the
-    board's chroma (`pipeline.colour.chroma_levels`), made when asked for."""
+    board's chroma (`pipeline.preprocess.chroma_levels`), made when asked for."""
     rounded = reference.round_board
     if not reference.board_is_outline and rounded is None:
         return []
@@ -454,12 +456,6 @@ def _quad_of(outline: np.ndarray) -> np.ndarray | None:
     return quad.reshape(4, 2).astype(np.float64) if len(quad) == 4 else None
 
 
-def _shoelace(poly: np.ndarray) -> float:
-    """A polygon's signed area (positive: clockwise on screen, y down)."""
-    x, y = poly[:, 0], poly[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
-
-
 def _area(quad: np.ndarray) -> float:
     """A polygon's area (at least a tiny one: it divides)."""
     return max(float(cv2.contourArea(quad.astype(np.float32))), 1e-9)
@@ -492,7 +488,7 @@ def _round_starts(
     # The ellipse's half axes, its points centre + a cos t + b sin t.
     A = np.column_stack([(quad[1] - quad[0]) / 2.0, (quad[2] - quad[1]) / 2.0])
     # (the pad's box comes out clockwise on screen, as a square board's does)
-    if np.sign(np.linalg.det(A)) != np.sign(_shoelace(pad_box_m(reference))):
+    if np.sign(np.linalg.det(A)) != np.sign(signed_area(pad_box_m(reference))):
         A = A @ np.diag([1.0, -1.0])
     starts = []
     for k in range(ROUND_TURNS):
@@ -580,7 +576,8 @@ def _turn_untold(levels: np.ndarray, reference: Reference, H: np.ndarray) -> boo
     own = _h_pattern(levels, reference, H)
     centre = pad_box_m(reference).mean(axis=0)
     return any(
-        not _h_pattern(levels, reference, H @ quarter_turn(centre, sign)) < own - QUARTER_MARGIN
+        not _h_pattern(levels, reference, H @ turn_about(centre, 90.0 * sign))
+        < own - QUARTER_MARGIN
         for sign in (1.0, -1.0)
     )
 
@@ -658,8 +655,14 @@ def _outline_in_chroma(
     if min(levels.shape) < 2 * _CHROMA_MARGIN:
         return False
     shift = np.array([[1.0, 0.0, -x0], [0.0, 1.0, -y0], [0.0, 0.0, 1.0]])
-    model = EdgeModel.from_polygons([(corners, True)])
-    return support(levels, model, shift @ H) >= MIN_OUTLINE_FOUND
+    return support(levels, _outline_model(reference, k), shift @ H) >= MIN_OUTLINE_FOUND
+
+
+@functools.lru_cache(maxsize=8)
+def _outline_model(reference: Reference, k: int) -> EdgeModel:
+    """Mark ``k``'s sides alone, bright inside (as the board is on its chroma): one per
+    reference, not one per fit."""
+    return EdgeModel.from_polygons([(reference.marks[k].corners_m, True)])
 
 
 def _found_share(found: np.ndarray) -> float:

@@ -137,23 +137,3 @@ def contrast(channel: np.ndarray, h_mask: np.ndarray, board_mask: np.ndarray) ->
     """Mean of the H minus mean of the board on a projected channel (0..255 units)."""
     c = channel.astype(np.float64)
     return float(c[np.asarray(h_mask, bool)].mean() - c[np.asarray(board_mask, bool)].mean())
-
-
-def chroma_levels(image_bgr: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """A BGR picture read on a chroma's weights (`pipeline.reference.Reference.board_chroma`),
-    as float32 levels smoothed for the sensor noise (as `pipeline.preprocess.smooth`):
-    signed, unscaled, so that a board's chroma keeps its full step against a grey floor
-    (fitted to the uint8 range over the colour cube, a blue board's step on grass came
-    to two thirds of it, its blurred edge under the drop an edge needs).
-
-    >>> img = np.zeros((8, 8, 3), np.uint8); img[:, 4:] = (200, 100, 0)
-    >>> w = np.array([1.0, 0.0, -1.0]) / np.sqrt(2.0)
-    >>> [round(float(v), 1) for v in chroma_levels(img, w)[4, [0, 7]]]
-    [0.0, 141.4]
-    """
-    if image_bgr.size == 0:  # (a box beyond the picture)
-        return np.zeros(image_bgr.shape[:2], np.float32)
-    levels = cv2.transform(
-        image_bgr.astype(np.float32), np.asarray(weights, np.float32).reshape(1, 3)
-    )
-    return cv2.GaussianBlur(levels.reshape(image_bgr.shape[:2]), (5, 5), 1.0)

@@ -36,7 +36,6 @@ import numpy as np
 from pipeline.board_search import MIN_BOARD_PX, MIN_BOARD_SUPPORT, find_boards
 from pipeline.camera import Camera
 from pipeline.candidates import MIN_EVIDENCE, fit_h_sides
-from pipeline.colour import chroma_levels
 from pipeline.find import (
     FIRST_LOOK_MIN_SPAN_PX,
     CandidateVerifier,
@@ -56,6 +55,7 @@ from pipeline.preprocess import (
     Binarized,
     Halvings,
     check_image,
+    chroma_levels,
     has_colour,
     smooth,
     smooth_channel,

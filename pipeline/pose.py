@@ -101,17 +101,6 @@ def half_turn(centre_m: np.ndarray) -> np.ndarray:
     return np.array([[-1.0, 0.0, 2.0 * cx], [0.0, -1.0, 2.0 * cy], [0.0, 0.0, 1.0]])
 
 
-def quarter_turn(centre_m: np.ndarray, sign: float) -> np.ndarray:
-    """The quarter turn of the pad plane about ``centre_m`` (x, y metres), counter-
-    clockwise for ``sign`` 1 and clockwise for -1, as a 3 x 3 homography of pad metres.
-
-    >>> quarter_turn(np.array([0.1, -0.05]), 1.0) @ [1.1, -0.05, 1.0]
-    array([0.1 , 0.95, 1.  ])
-    """
-    cx, cy = (float(v) for v in np.asarray(centre_m, np.float64).reshape(2))
-    return np.array([[0.0, -sign, cx + sign * cy], [sign, 0.0, cy - sign * cx], [0.0, 0.0, 1.0]])
-
-
 def turn_about(centre_m: np.ndarray, deg: float) -> np.ndarray:
     """The turn of the pad plane by ``deg`` degrees counter-clockwise about ``centre_m``
     (x, y metres), as a 3 x 3 homography of pad metres.

@@ -218,6 +218,26 @@ def smooth(channel: np.ndarray) -> np.ndarray:
     return cv2.GaussianBlur(channel, (5, 5), 1.0)
 
 
+def chroma_levels(image_bgr: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """A BGR picture read on a chroma's weights (`pipeline.reference.Reference.board_chroma`),
+    as float32 levels smoothed for the sensor noise (`smooth`): signed, unscaled, so that
+    a board's chroma keeps its full step against a grey floor (fitted to the uint8 range
+    over the colour cube, a blue board's step on grass came to two thirds of it, its
+    blurred edge under the drop an edge needs).
+
+    >>> img = np.zeros((8, 8, 3), np.uint8); img[:, 4:] = (200, 100, 0)
+    >>> w = np.array([1.0, 0.0, -1.0]) / np.sqrt(2.0)
+    >>> [round(float(v), 1) for v in chroma_levels(img, w)[4, [0, 7]]]
+    [0.0, 141.4]
+    """
+    if image_bgr.size == 0:  # (a box beyond the picture)
+        return np.zeros(image_bgr.shape[:2], np.float32)
+    levels = cv2.transform(
+        image_bgr.astype(np.float32), np.asarray(weights, np.float32).reshape(1, 3)
+    )
+    return smooth(levels.reshape(image_bgr.shape[:2]))
+
+
 def above_local_mean(channel: np.ndarray, block: int, by: int) -> np.ndarray:
     """255 where a uint8 channel is more than ``by`` (>= 0) above its mean over the
     ``block`` x ``block`` square around it (the border replicated), else 0: what

@@ -244,7 +244,7 @@ class Reference:
         board its chroma's size), when it has one (``MIN_BOARD_CHROMA``); None for a
         grey or white board, whose rim only lightness tells. A blue board on grass
         stands out there, where on the H's channel (white against blue: the blue dark,
-        the grass no lighter) it barely steps (`pipeline.colour.chroma_levels`)."""
+        the grass no lighter) it barely steps (`pipeline.preprocess.chroma_levels`)."""
         board = np.asarray(self.board_bgr, np.float64)
         chroma = board - board.mean()
         size = float(np.linalg.norm(chroma))
