@@ -134,7 +134,7 @@ def find_boards(
     # How far around a mark the size of the H each board reaches: the pad's outline, the
     # round board's.
     ratio = reference.pad_over_h if reference.board_is_outline else None
-    round_ratio = None if rounded is None else 2.0 * rounded.radius_m / reference.h_size_m
+    round_ratio = None if rounded is None else 2.0 * rounded.seen_m / reference.h_size_m
     ratios = [r for r in (ratio, round_ratio) if r is not None]
     # The marks of the H's polarity small enough for their H to be missed, and large
     # enough for a board the size of MIN_BOARD_PX around them; on a textured floor
@@ -173,7 +173,7 @@ def find_boards(
     edges = _board_outlines(reference)
     for board in boards[:MAX_BOARDS]:
         if board.round and rounded is not None:
-            starts = _round_starts(board.quad, reference, rounded.centre_m, rounded.radius_m)
+            starts = _round_starts(board.quad, reference, rounded.centre_m, rounded.seen_m)
             outline = rounded.mark
         else:
             starts, outline = _quad_starts(board.quad, edges), _outline_mark(reference)

@@ -38,6 +38,12 @@ BAND_STEP_SHARE = 0.5  # ... and this share of the rim's own step
 RIM_STEP = 0.25  # a rim: the board steps to what lies beyond by this share of the paint's step
 FAINT_RIM_STEP = 0.5  # ... a faint one, under this share
 BOARD_OVER_H = 1.5  # a board is this many times the H's area at least
+RIM_BAND_PX = 4  # what lies right beyond a rim: this wide a band (picture pixels)
+MIN_RIM_CHROMA = 20.0  # a coloured board's rim steps this far on its chroma (BGR levels)
+# A board touching the picture's edge is a disc cropped to its width when this share
+# of its outline lies off the edge, 90 % of it this near an ellipse (of its radius), and
+# the ellipse runs beyond the edge by a pixel and this share of its width at most.
+DISC_SHARE, DISC_FIT, DISC_CROP, DISC_VERTICES = 0.6, 0.01, 0.02, 64
 _FRINGE = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (7, 7))  # an edge's blur, 3 px each way
 
 
@@ -51,6 +57,9 @@ class Mark:
     rim: bool = False  # the board's outer edge: the floor lies beyond it
     band_m: float = 0.0  # a rim's: the band of another colour right beyond it (`band_beyond`)
     faint: bool = False  # a rim stepping under half as far as the H's paint (`find_marks`)
+    # a rim lighter than the band right beyond it and darker than the floor, or the
+    # other way round: its edge is the band's, lost where the band is (`find_marks`)
+    banded: bool = False
 
     def to_dict(self) -> dict:
         return {
@@ -59,14 +68,20 @@ class Mark:
             "rim": bool(self.rim),
             "band_m": float(self.band_m),
             "faint": bool(self.faint),
+            "banded": bool(self.banded),
         }
 
 
 def find_marks(
-    smooth: np.ndarray, level: float, board_level: float, h_region: np.ndarray
-) -> list[tuple[np.ndarray, bool, bool, bool]]:
+    smooth: np.ndarray,
+    level: float,
+    board_level: float,
+    h_region: np.ndarray,
+    chroma: tuple[np.ndarray, float] | None = None,
+) -> list[tuple[np.ndarray, bool, bool, bool, bool]]:
     """Polygons (picture pixels) of the marks on a smoothed channel, with their brightness,
-    whether each is the board's rim and whether that rim is faint.
+    whether each is the board's rim, whether that rim is faint and whether it is banded
+    (`Mark`).
 
     ``level``: half-way between the H's paint and its board; ``board_level``:
     the board's. Boundaries of the paint-coloured regions other than the H
@@ -77,10 +92,18 @@ def find_marks(
     pad's poses came 0.67 % off the altitude, not 1.14 %). Such a rim, under
     ``FAINT_RIM_STEP``, is faint: from afar, on a view enlarged by interpolation, its
     edge is no longer found.
+
+    ``chroma``: the picture read on the board's colour (`chroma_levels`) and the board's
+    level there, for a coloured board. Where the channel tells no rim, the board's rim
+    is looked for there too (stepping ``MIN_RIM_CHROMA`` at least): on the learned
+    channel of a real orange disc on concrete the disc stepped 18 levels, its shading
+    as much, and the cut ran into the floor; a synthetic one on dark grey stepped none.
+    On the disc's chroma both stepped over 95.
     """
     h, w = smooth.shape
     area = float(h * w)
-    out: list[tuple[float, np.ndarray, bool, bool, bool]] = []  # area, poly, bright, rim, faint
+    # (area, polygon, bright, rim, faint, banded)
+    out: list[tuple[float, np.ndarray, bool, bool, bool, bool]] = []
     paint = (smooth > level).astype(np.uint8)
     # Every paint region that touches the H is the H (the H was found at
     # another threshold than this one).
@@ -88,55 +111,136 @@ def find_marks(
     h_labels = np.unique(labels[h_region & (paint > 0)])
     others = paint.copy()
     others[np.isin(labels, h_labels[h_labels > 0]) | h_region] = 0
-    out += [(*b, False, False) for b in _boundaries(others, smooth, area, bright_inside=True)]
+    out += [
+        (*b, False, False, False) for b in _boundaries(others, smooth, area, bright_inside=True)
+    ]
     # What lies beyond the board (a floor around a disc, the paper around a
     # card) is told by the picture's rim.
-    rim = np.concatenate([smooth[0], smooth[-1], smooth[:, 0], smooth[:, -1]]).astype(float)
-    beyond = float(np.median(rim))
+    beyond = float(np.median(_picture_rim(smooth)))
     step = abs(level - board_level)
+    rims: list[tuple[float, np.ndarray, bool]] = []
+    faint = abs(beyond - board_level) < FAINT_RIM_STEP * step
+
+    def around_the_marks(found: list[tuple[float, np.ndarray, bool]]) -> list:
+        # (a floor all round the board made its rim a hole's outline already;
+        # and the marks lie on the board: an outline inside one of them, a ring's
+        # hole cut at a level near the board's, is none of its rim)
+        return [
+            r
+            for r in found
+            if not any(_same_outline(r, o[:3]) for o in out)
+            and all(_encloses(r[1], o[1]) for o in out)
+        ]
+
     if abs(beyond - board_level) > RIM_STEP * step:
-        cut = 0.5 * (beyond + board_level)
-        board = (smooth < cut) if beyond > board_level else (smooth > cut)
-        board = board.astype(np.uint8)
         on_board = paint
         if (beyond > board_level) == (level > board_level):
             # A floor as light as the paint (a grey floor around a black disc, on a red
             # channel) is no mark on the board: the paint that reaches the picture's
             # edge is left out, or the board would run into the floor.
             on_board = _off_the_edge(paint)
-        # The board component around the H, holes filled: its outer edge is the pad's rim.
-        # The H's blurred edge, between the paint's level and the cut, is neither board
-        # nor paint: the H grown over it joins the board (without, a cut near the board's
-        # level left the H alone, and its own outline was taken for the rim).
-        grown = cv2.dilate(h_region.astype(np.uint8), _FRINGE)
-        _, labels = cv2.connectedComponents(board | on_board | grown)
-        ys, xs = np.nonzero(h_region)
-        k = int(np.bincount(labels[ys, xs]).argmax())
-        comp = (labels == k).astype(np.uint8)
-        if k > 0 and np.count_nonzero(comp) > BOARD_OVER_H * np.count_nonzero(grown):
-            edge = np.concatenate([comp[0], comp[-1], comp[:, 0], comp[:, -1]])
-            # A disc cropped to its width touches the picture's edge at four
-            # points; a board that runs along it has no rim in the picture.
-            if np.mean(edge) < 0.1:
-                rims = _boundaries(
-                    comp, smooth, area, bright_inside=beyond < board_level, holes=False, rim=True
-                )
-                # (a floor all round the board made its rim a hole's outline already;
-                # and the marks lie on the board: an outline inside one of them, a ring's
-                # hole cut at a level near the board's, is none of its rim)
-                faint = abs(beyond - board_level) < FAINT_RIM_STEP * step
-                out += [
-                    (*r, True, faint)
-                    for r in rims
-                    if not any(_same_outline(r, o[:3]) for o in out)
-                    and all(_encloses(r[1], o[1]) for o in out)
-                ]
-    else:
+        rims = around_the_marks(_rim(smooth, beyond, board_level, on_board, h_region))
+    # (on the board's colour, what lies beyond may differ where the channel says not)
+    differs = abs(beyond - board_level) > RIM_STEP * step
+    if not rims and chroma is not None:
+        levels, board_chroma = chroma
+        beyond_chroma = float(np.median(_picture_rim(levels)))
+        if board_chroma - beyond_chroma > MIN_RIM_CHROMA:
+            differs = True
+            found = _rim(levels, beyond_chroma, board_chroma, _off_the_edge(paint), h_region)
+            rims = around_the_marks(found)
+    # A rim is bright inside where the board is lighter than what lies right beyond it
+    # on the channel: a real orange disc (57) darker than the concrete beyond (75) is
+    # lighter than the black hem between them (38), whose edge with it the rim is.
+    # Where the floor beyond it lies the other side of the board's level, the rim's edge
+    # is the band's: from afar, the band under a pixel, it is lost.
+    for a, poly, _ in rims:
+        bright = _level_beyond(smooth, poly) < board_level
+        out.append((a, poly, bright, True, faint, bright != (beyond < board_level)))
+    if not differs:
         # The board fills the picture to its edge: the edge is the board's rim.
         rect = np.array([[-0.5, -0.5], [w - 0.5, -0.5], [w - 0.5, h - 0.5], [-0.5, h - 0.5]])
-        out.append((area, rect, False, True, False))
+        out.append((area, rect, False, True, False, False))
     out.sort(key=lambda item: -item[0])
-    return [(poly, bright, rim, faint) for _, poly, bright, rim, faint in out[:MAX_MARKS]]
+    return [item[1:] for item in out[:MAX_MARKS]]
+
+
+def _picture_rim(levels: np.ndarray) -> np.ndarray:
+    """The levels along the picture's edge."""
+    return np.concatenate([levels[0], levels[-1], levels[:, 0], levels[:, -1]]).astype(float)
+
+
+def _level_beyond(smooth: np.ndarray, poly: np.ndarray) -> float:
+    """The median level of a band ``RIM_BAND_PX`` wide right outside a polygon (of the
+    picture's pixels; the polygon's own level where none lies outside)."""
+    inside = np.zeros(smooth.shape, np.uint8)
+    cv2.fillPoly(inside, [np.round(poly).astype(np.int32)], 1)
+    band = cv2.dilate(inside, np.ones((2 * RIM_BAND_PX + 1,) * 2, np.uint8)) > inside
+    return float(np.median(smooth[band])) if band.any() else float(np.median(smooth[inside > 0]))
+
+
+def _rim(
+    levels: np.ndarray,
+    beyond: float,
+    board_level: float,
+    on_board: np.ndarray,
+    h_region: np.ndarray,
+) -> list[tuple[float, np.ndarray, bool]]:
+    """The board's outline (area, polygon, bright inside) on ``levels``, cut half-way
+    between the board's level and what lies beyond it, with the marks ``on_board`` and
+    the H joined to it; none where the board runs along the picture's edge."""
+    h, w = levels.shape
+    cut = 0.5 * (beyond + board_level)
+    board = ((levels < cut) if beyond > board_level else (levels > cut)).astype(np.uint8)
+    # The board component around the H, holes filled: its outer edge is the pad's rim.
+    # The H's blurred edge, between the paint's level and the cut, is neither board
+    # nor paint: the H grown over it joins the board (without, a cut near the board's
+    # level left the H alone, and its own outline was taken for the rim).
+    grown = cv2.dilate(h_region.astype(np.uint8), _FRINGE)
+    _, labels = cv2.connectedComponents(board | on_board | grown)
+    ys, xs = np.nonzero(h_region)
+    k = int(np.bincount(labels[ys, xs]).argmax())
+    comp = (labels == k).astype(np.uint8)
+    if k == 0 or np.count_nonzero(comp) <= BOARD_OVER_H * np.count_nonzero(grown):
+        return []
+    bright_inside = beyond < board_level
+    # A disc cropped to its width touches the picture's edge at four points; a board
+    # that runs along it has no rim in the picture, unless the rest of its outline is
+    # an ellipse: a disc cropped to a little less than its width.
+    if np.mean(_picture_rim(comp)) < 0.1:
+        return _boundaries(
+            comp, levels, float(h * w), bright_inside=bright_inside, holes=False, rim=True
+        )
+    disc = _cropped_disc(comp)
+    return [] if disc is None else [(abs(_area(disc)), disc, bright_inside)]
+
+
+def _cropped_disc(comp: np.ndarray) -> np.ndarray | None:
+    """The ellipse (a polygon of ``DISC_VERTICES``) that the outline of a board touching
+    the picture's edge follows away from it (``DISC_FIT`` of its radius, ``DISC_SHARE``
+    of it at least), where the ellipse lies within the picture but for ``DISC_CROP``: a
+    disc cropped to its width or a little tighter. None for anything else."""
+    h, w = comp.shape
+    contours, _ = cv2.findContours(comp, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    pts = max(contours, key=cv2.contourArea).reshape(-1, 2)
+    inner = (pts[:, 0] > 1) & (pts[:, 1] > 1) & (pts[:, 0] < w - 2) & (pts[:, 1] < h - 2)
+    if inner.mean() < DISC_SHARE or inner.sum() < 5:
+        return None
+    (cx, cy), (a, b), angle = cv2.fitEllipse(pts[inner].reshape(-1, 1, 2).astype(np.float32))
+    t = np.linspace(0.0, 2.0 * np.pi, DISC_VERTICES, endpoint=False)
+    rot = np.deg2rad(angle)
+    local = np.stack([0.5 * a * np.cos(t), 0.5 * b * np.sin(t)], axis=1)
+    turn = np.array([[np.cos(rot), -np.sin(rot)], [np.sin(rot), np.cos(rot)]])
+    poly = local @ turn.T + [cx, cy]
+    reach = 1.0 + DISC_CROP * max(a, b)  # (beyond the picture's edge, at -0.5)
+    if (poly < -0.5 - reach).any() or (poly > np.array([w, h]) - 0.5 + reach).any():
+        return None
+    # (each outline point's distance from the ellipse, read on the unit circle it maps to)
+    p = (pts[inner] - [cx, cy]) @ turn
+    r = np.hypot(p[:, 0] / (0.5 * a), p[:, 1] / (0.5 * b))
+    if float(np.percentile(np.abs(r - 1.0), 90)) > DISC_FIT:
+        return None
+    return poly
 
 
 def band_beyond(picture: np.ndarray, rim: np.ndarray) -> float:

@@ -492,13 +492,19 @@ def _thin_strokes(H: np.ndarray, reference: Reference) -> bool:
 def _marks_found(fit: HomographyFit, reference: Reference) -> float:
     """The share of the marks' sides (long enough to tell, ``MARK_SIDE_PX``) that the
     whole-pad fit found, of a few sides their lengths' (``MIN_MARK_SIDES_SEEN``); the
-    model lists the H's 12 sides first."""
+    model lists the H's 12 sides first. A faint rim's sides count only where the other
+    marks have too few to tell: from afar its edge is lost (a real orange disc's rim,
+    stepping 19 levels to its hem, is a third of its pad's sides; with it counted, its
+    pads 16-24 m away found too few of their marks, 4-9 of 20 more lost)."""
     model = reference.edge_model
     ends = apply_h(fit.H, model.ends)
     n = len(model.a_m)
     length = np.hypot(*(ends[n:] - ends[:n]).T)
     use = np.arange(n) >= len(reference.corners_m)
     use &= (length >= MARK_SIDE_PX) | model.curved
+    faint = np.isin(model.polygon, [k + 1 for k, m in enumerate(reference.marks) if m.faint])
+    if np.count_nonzero(use & ~faint & np.isfinite(fit.side_found)) >= MIN_MARK_SIDES_SEEN:
+        use &= ~faint
     found = fit.side_found[use]
     seen = np.isfinite(found)
     count = np.count_nonzero(seen)

@@ -32,6 +32,7 @@ from pipeline.preprocess import (
     binarize_channel,
     border_pixels,
     check_image,
+    chroma_levels,
     log_light,
     tophat_rise,
 )
@@ -75,11 +76,14 @@ _BOARD_UNIFORMITY = 0.05
 
 class RoundBoard(NamedTuple):
     """The H's board where it is round (`Reference.round_board`): its circle's centre
-    and radius (pad metres), and which of the reference's marks it is."""
+    and radius (pad metres), and which of the reference's marks it is; ``seen_m``: the
+    radius it shows from afar, a banded rim's band included (`pipeline.marks.Mark`: a
+    black hem between an orange disc and lighter concrete is the disc's side of both)."""
 
     centre_m: np.ndarray
     radius_m: float
     mark: int
+    seen_m: float
 
 
 @dataclass(frozen=True, eq=False)
@@ -170,7 +174,9 @@ class Reference:
     def _pad_model(self, *, hems: bool) -> EdgeModel:
         """The H's and the marks' sides, the rims' hems told (``hems``) or not."""
         polys = [(self.corners_m, True)] + [(m.corners_m, m.bright) for m in self.marks]
-        rims = {k + 1: m.band_m if hems else 0.0 for k, m in enumerate(self.marks) if m.rim}
+        rims = {
+            k + 1: m.band_m if hems or m.banded else 0.0 for k, m in enumerate(self.marks) if m.rim
+        }
         return EdgeModel.from_polygons(polys, rims=rims)
 
     @cached_property
@@ -178,7 +184,7 @@ class Reference:
         """The sides of the marks alone (None when the pad has none)."""
         if not self.marks:
             return None
-        rims = {k: 0.0 for k, m in enumerate(self.marks) if m.rim}
+        rims = {k: m.band_m if m.banded else 0.0 for k, m in enumerate(self.marks) if m.rim}
         return EdgeModel.from_polygons([(m.corners_m, m.bright) for m in self.marks], rims=rims)
 
     @cached_property
@@ -209,8 +215,17 @@ class Reference:
         its border all one level on the learned channel), which tells a far pad
         (`pipeline.board_search`); not a disc on its floor, nor paint on grass."""
         ch = self.channel.astype(np.float32)
-        border = border_pixels(ch, max(2, min(ch.shape) // 50))
-        return float(border.std()) <= _BOARD_UNIFORMITY * self.contrast
+        width = max(2, min(ch.shape) // 50)
+        if float(border_pixels(ch, width).std()) > _BOARD_UNIFORMITY * self.contrast:
+            return False
+        # (and the board's colour, for a coloured board: an orange disc cropped to its
+        # width on dark grey is one level with the grey on the channel)
+        weights = self.board_chroma
+        if weights is None:
+            return True
+        work = cv2.resize(self.image, ch.shape[::-1], interpolation=cv2.INTER_AREA)
+        border = float(np.median(border_pixels(chroma_levels(work, weights), width)))
+        return border >= 0.5 * float(np.dot(weights, self.board_bgr))
 
     @cached_property
     def round_board(self) -> RoundBoard | None:
@@ -222,7 +237,9 @@ class Reference:
         found = None
         for k, mark in enumerate(self.marks):
             pts = mark.corners_m
-            if mark.bright or mark.faint or len(pts) < 8:
+            if (mark.bright and not mark.rim) or len(pts) < 8:
+                continue
+            if mark.faint and self.board_chroma is None:
                 continue
             centre = pts.mean(axis=0)
             # (the sides' middles too: a polygon's corners alone lie on its circle)
@@ -234,7 +251,9 @@ class Reference:
             if float(np.hypot(*(self.corners_m - centre).T).max()) >= radius:
                 continue  # (the H reaches past it: it is no board around the H)
             if found is None or radius > found.radius_m:
-                found = RoundBoard(centre, radius, k)
+                found = RoundBoard(
+                    centre, radius, k, radius + (mark.band_m if mark.banded else 0.0)
+                )
         return found
 
     @cached_property
@@ -245,10 +264,7 @@ class Reference:
         grey or white board, whose rim only lightness tells. A blue board on grass
         stands out there, where on the H's channel (white against blue: the blue dark,
         the grass no lighter) it barely steps (`pipeline.preprocess.chroma_levels`)."""
-        board = np.asarray(self.board_bgr, np.float64)
-        chroma = board - board.mean()
-        size = float(np.linalg.norm(chroma))
-        return None if size < MIN_BOARD_CHROMA else chroma / size
+        return _chroma_weights(self.board_bgr)
 
     @property
     def outline_share(self) -> float | None:
@@ -458,9 +474,24 @@ class Reference:
         corners_m = to_m(h_poly)
         # (a rim's band: its width in metres, the picture's pixels square)
         m_per_px = pad_size_m / ww
+        board_bgr = _median_bgr(work, board_mask)
+        weights = _chroma_weights(board_bgr)
+        chroma = None
+        if weights is not None:
+            levels = chroma_levels(work, weights)
+            chroma = (levels, float(np.median(levels[board_mask])))
         marks = tuple(
-            Mark(to_m(poly), bright, rim, m_per_px * band_beyond(work, poly) if rim else 0.0, faint)
-            for poly, bright, rim, faint in find_marks(smooth, level, board_level, region)
+            Mark(
+                to_m(poly),
+                bright,
+                rim,
+                m_per_px * band_beyond(work, poly) if rim else 0.0,
+                faint,
+                banded,
+            )
+            for poly, bright, rim, faint, banded in find_marks(
+                smooth, level, board_level, region, chroma
+            )
         )
         contour = _outer_contour(region)
         mom = shape_moments(contour)
@@ -484,7 +515,7 @@ class Reference:
             light_contrast=light_contrast,
             leg_fraction=fit.leg_fraction,
             paint_bgr=_median_bgr(work, h_mask),
-            board_bgr=_median_bgr(work, board_mask),
+            board_bgr=board_bgr,
             channel=channel,
             channel_px_per_m=ww / pad_size_m,
             lesser_hs=tuple(to_m(c) for c in _lesser_hs(mask, region)),
@@ -808,6 +839,14 @@ def _h_and_board(region: np.ndarray, fit: HFit) -> tuple[np.ndarray, np.ndarray]
     cv2.fillConvexPoly(hull, cv2.convexHull(fit.corners.astype(np.int32)), 1)
     board = (far | (hull > 0)) & ~near
     return core, board
+
+
+def _chroma_weights(bgr: tuple[float, float, float]) -> np.ndarray | None:
+    """Unit BGR weights of a colour's chroma, or None for a grey (`Reference.board_chroma`)."""
+    colour = np.asarray(bgr, np.float64)
+    chroma = colour - colour.mean()
+    size = float(np.linalg.norm(chroma))
+    return None if size < MIN_BOARD_CHROMA else chroma / size
 
 
 def _median_bgr(image: np.ndarray, mask: np.ndarray) -> tuple[float, float, float]:
