@@ -158,7 +158,9 @@ def find_boards(
     grown = [
         board
         for seed in small[:MAX_SEEDS] + large[:MAX_LARGE_SEEDS]
-        for board in _grow_boards(levels, seed, ratio, least_board, round_ratio=round_ratio)
+        for board in _grow_boards(
+            levels, seed, ratio, least_board, round_ratio=round_ratio, chroma=chroma
+        )
     ]
     whole = [] if ratio is None else [
         _board_of_hole(levels, hole, least_board, widest * ratio)
@@ -193,11 +195,14 @@ def _grow_boards(
     min_px: float,
     *,
     round_ratio: float | None = None,
+    chroma: Callable[[tuple[int, int, int, int]], np.ndarray] | None = None,
 ) -> list[Board]:
     """The board around a mark, grown two ways, where it is a quadrilateral the pad's
     size for the mark (``ratio``: the pad's width over the H's; None: no square board)
     or an ellipse the round board's (``round_ratio``: its width over the H's; see
-    `_board_ellipse`).
+    `_board_ellipse`); on ``levels``, and on the board's ``chroma`` where it has one
+    (see `find_boards`): on grass, thin's blue board 15 m away stood 20-25 levels from
+    the floor on its H's channel, under a noise of 16-21, and grew nowhere.
 
     Between a light H and a dark board (or the reverse) the blur crosses the floor's
     level, so the board is not simply the pixels off the floor's level. It is grown
@@ -220,9 +225,33 @@ def _grow_boards(
         return []
     seed = np.zeros(win.shape, np.uint8)
     cv2.fillPoly(seed, [(mark.contour - [x0, y0]).astype(np.int32).reshape(-1, 1, 2)], 1)
-    floor, noise = _floor_and_noise(win, 2)
     near = cv2.dilate(seed, _NEAR) & (1 - seed)
     core = cv2.dilate(seed, _CORE) & (1 - seed)
+    wins = [win]
+    if chroma is not None:
+        # (the board's chroma, the floor's greys and other hues 0 and below: a level)
+        box = (x0, y0, x0 + win.shape[1], y0 + win.shape[0])
+        wins.append(np.clip(chroma(box) + 0.5, 0.0, 255.0).astype(np.uint8))
+    at = np.array([x0, y0], np.float64)
+    boards = []
+    for win in wins:
+        boards += _boards_in(win, seed, near, core, size, ratio, round_ratio, min_px, at)
+    return boards
+
+
+def _boards_in(
+    win: np.ndarray,
+    seed: np.ndarray,
+    near: np.ndarray,
+    core: np.ndarray,
+    size: float,
+    ratio: float | None,
+    round_ratio: float | None,
+    min_px: float,
+    at: np.ndarray,
+) -> list[Board]:
+    """`_grow_boards` on one window of levels (``at``: its corner in the view)."""
+    floor, noise = _floor_and_noise(win, 2)
     boards = []
     for ring, percent, bridged in ((near, 10.0, False), (core, 5.0, True)):
         # The board's level: beyond the H's blur (a median, the H's light blurred
@@ -237,7 +266,6 @@ def _grow_boards(
             part = _part_with(grown | near | seed, seed, fill=True)
         else:
             part = _part_with(grown | seed, near, fill=False)
-        at = np.array([x0, y0], np.float64)
         quad = None if ratio is None else _board_quad(part, seed, size, ratio, min_px)
         if quad is not None:
             boards.append(Board(quad + at, contrast))

@@ -231,9 +231,11 @@ class Reference:
     def round_board(self) -> RoundBoard | None:
         """The H's board where it is round: the largest mark around the H that is a
         circle (or near one: an octagon's sides' middles lie 8 % within its corners) and
-        dark inside on the channel, as the H's board is (a disc's rim, an octagon
-        printed on paper, the disc a ring holds). From afar it shows as an ellipse,
-        which tells the pad as a square board's outline does (`pipeline.board_search`)."""
+        dark inside on the channel, as the H's board is, or the board's rim (a disc's
+        rim, an octagon printed on paper, the disc a ring holds). From afar it shows as
+        an ellipse, which tells the pad as a square board's outline does
+        (`pipeline.board_search`). A faint rim only on a coloured board, whose outline is
+        looked for on its colour too."""
         found = None
         for k, mark in enumerate(self.marks):
             pts = mark.corners_m

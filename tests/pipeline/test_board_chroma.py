@@ -14,11 +14,12 @@ import pytest
 
 from pipeline import Camera, process_frame
 from pipeline.bench.sweep import altitude_points
-from pipeline.bench.tally import pose_errors
+from pipeline.bench.tally import TURN, pose_errors
 from pipeline.render import get_design
 from tests.pipeline.bench_support import design_reference, sweep_frames
 
 CAM = Camera.from_fov(640, 480, 60.0)
+SAME = np.eye(3)
 
 
 @pytest.mark.parametrize("design", ["thin", "orange_ring"])
@@ -49,3 +50,20 @@ def test_a_far_blue_board_is_found_by_its_outline_on_its_chroma(j):
     grey = np.repeat(pad.mean(axis=2, keepdims=True).astype(np.uint8), 3, axis=2)
     assert process_frame(grey, reference, CAM, gravity_hint=hint).found_by != "board"
     assert process_frame(grey[..., 0], reference, CAM, gravity_hint=hint).found_by != "board"
+
+
+@pytest.mark.parametrize("j", [5, 9])
+def test_a_far_blue_board_on_grass_grows_on_its_chroma(j):
+    # 15.3 m: the H too faint to place, its blue board 20-25 levels from the grass on
+    # the H's channel under a floor noise of 16-21: no board grew around it there.
+    point = 11
+    altitude = altitude_points(get_design("thin"), CAM)[point]
+    pad, empty, view, hint, reference = sweep_frames("thin", CAM, point, altitude, j, per_point=20)
+    res = process_frame(pad, reference, CAM, gravity_hint=hint)
+    assert res.detected and res.found_by == "board", res.reason
+    # (modulo the half turn, which thin's symmetric pad does not tell)
+    errors = [
+        pose_errors(res.pose, T @ view.position_m, T @ view.R_pad_cam)[0] for T in (SAME, TURN)
+    ]
+    assert min(errors) < 8.0
+    assert not process_frame(empty, reference, CAM, gravity_hint=hint).detected
