@@ -493,9 +493,9 @@ def _marks_found(fit: HomographyFit, reference: Reference) -> float:
     """The share of the marks' sides (long enough to tell, ``MARK_SIDE_PX``) that the
     whole-pad fit found, of a few sides their lengths' (``MIN_MARK_SIDES_SEEN``); the
     model lists the H's 12 sides first. A faint rim's sides count only where the other
-    marks have too few to tell: from afar its edge is lost (a real orange disc's rim,
-    stepping 19 levels to its hem, is a third of its pad's sides; with it counted, its
-    pads 16-24 m away found too few of their marks, 4-9 of 20 more lost)."""
+    marks have too few to tell: from afar its edge is lost, and a pad should not count
+    short for it (orange_ring_synth's disc on dark grey, a third of its pad's sides: 99
+    of its 160 sweep views at 18-51 m found, against 97 with them counted)."""
     model = reference.edge_model
     ends = apply_h(fit.H, model.ends)
     n = len(model.a_m)
