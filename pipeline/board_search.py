@@ -45,7 +45,7 @@ from pipeline.jit import compiled
 from pipeline.measure import pad_box_m
 from pipeline.pose import turn_about
 from pipeline.reference import Reference
-from pipeline.shapes import Region
+from pipeline.shapes import Region, ellipse_misfit
 from pipeline.template import pad_pattern, pattern_box
 
 MIN_BOARD_PX = 12.0  # a board narrower than this (frame pixels) holds too few for its pattern
@@ -454,19 +454,18 @@ def _board_ellipse(
     outline = max(outlines, key=cv2.contourArea)
     if len(outline) < 5:
         return None
-    (cx, cy), (w, h), angle = cv2.fitEllipse(outline)
+    ellipse = cv2.fitEllipse(outline)
+    (cx, cy), (w, h), angle = ellipse
     area = math.pi * w * h / 4.0
     if min(w, h) <= 0.0 or not _ROUND_FILL[0] <= cv2.contourArea(outline) / area <= _ROUND_FILL[1]:
+        return None
+    # Its outline on the ellipse: a square's corners stand 19 % beyond the ellipse
+    # fitted to it, its sides' middles 15 % within.
+    if ellipse_misfit(outline, ellipse) > _ROUND_TOL:
         return None
     t = math.radians(angle)
     u = np.array([math.cos(t), math.sin(t)])
     v = np.array([-math.sin(t), math.cos(t)])
-    # Its outline on the ellipse: a square's corners stand 19 % beyond the ellipse
-    # fitted to it, its sides' middles 15 % within.
-    off = outline.reshape(-1, 2) - [cx, cy]
-    radii = np.hypot(off @ u / (w / 2.0), off @ v / (h / 2.0))
-    if float(np.percentile(np.abs(radii - 1.0), 90)) > _ROUND_TOL:
-        return None
     if np.count_nonzero(part & (1 - seed)) / area < MIN_BOARD_SHARE:
         return None
     span = float(max(w, h))

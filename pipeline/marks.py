@@ -21,6 +21,8 @@ import numpy as np
 
 from pipeline.edgefit import CURVE_VERTICES
 from pipeline.edges import refine_polygon
+from pipeline.preprocess import border_pixels
+from pipeline.shapes import ellipse_misfit
 
 MIN_MARK_AREA = 0.0005  # of the picture: smaller specks are texture, not marks
 MAX_MARKS = 16
@@ -116,7 +118,7 @@ def find_marks(
     ]
     # What lies beyond the board (a floor around a disc, the paper around a
     # card) is told by the picture's rim.
-    beyond = float(np.median(_picture_rim(smooth)))
+    beyond = float(np.median(border_pixels(smooth, 1)))
     step = abs(level - board_level)
     rims: list[tuple[float, np.ndarray, bool]] = []
     faint = abs(beyond - board_level) < FAINT_RIM_STEP * step
@@ -144,7 +146,7 @@ def find_marks(
     differs = abs(beyond - board_level) > RIM_STEP * step
     if not rims and chroma is not None:
         levels, board_chroma = chroma
-        beyond_chroma = float(np.median(_picture_rim(levels)))
+        beyond_chroma = float(np.median(border_pixels(levels, 1)))
         if board_chroma - beyond_chroma > MIN_RIM_CHROMA:
             differs = True
             found = _rim(levels, beyond_chroma, board_chroma, _off_the_edge(paint), h_region)
@@ -163,11 +165,6 @@ def find_marks(
         out.append((area, rect, False, True, False, False))
     out.sort(key=lambda item: -item[0])
     return [item[1:] for item in out[:MAX_MARKS]]
-
-
-def _picture_rim(levels: np.ndarray) -> np.ndarray:
-    """The levels along the picture's edge."""
-    return np.concatenate([levels[0], levels[-1], levels[:, 0], levels[:, -1]]).astype(float)
 
 
 def _level_beyond(smooth: np.ndarray, poly: np.ndarray) -> float:
@@ -207,7 +204,7 @@ def _rim(
     # A disc cropped to its width touches the picture's edge at four points; a board
     # that runs along it has no rim in the picture, unless the rest of its outline is
     # an ellipse: a disc cropped to a little less than its width.
-    if np.mean(_picture_rim(comp)) < 0.1:
+    if np.mean(border_pixels(comp, 1)) < 0.1:
         return _boundaries(
             comp, levels, float(h * w), bright_inside=bright_inside, holes=False, rim=True
         )
@@ -226,7 +223,8 @@ def _cropped_disc(comp: np.ndarray) -> np.ndarray | None:
     inner = (pts[:, 0] > 1) & (pts[:, 1] > 1) & (pts[:, 0] < w - 2) & (pts[:, 1] < h - 2)
     if inner.mean() < DISC_SHARE or inner.sum() < 5:
         return None
-    (cx, cy), (a, b), angle = cv2.fitEllipse(pts[inner].reshape(-1, 1, 2).astype(np.float32))
+    ellipse = cv2.fitEllipse(pts[inner].reshape(-1, 1, 2).astype(np.float32))
+    (cx, cy), (a, b), angle = ellipse
     t = np.linspace(0.0, 2.0 * np.pi, DISC_VERTICES, endpoint=False)
     rot = np.deg2rad(angle)
     local = np.stack([0.5 * a * np.cos(t), 0.5 * b * np.sin(t)], axis=1)
@@ -235,12 +233,7 @@ def _cropped_disc(comp: np.ndarray) -> np.ndarray | None:
     reach = 1.0 + DISC_CROP * max(a, b)  # (beyond the picture's edge, at -0.5)
     if (poly < -0.5 - reach).any() or (poly > np.array([w, h]) - 0.5 + reach).any():
         return None
-    # (each outline point's distance from the ellipse, read on the unit circle it maps to)
-    p = (pts[inner] - [cx, cy]) @ turn
-    r = np.hypot(p[:, 0] / (0.5 * a), p[:, 1] / (0.5 * b))
-    if float(np.percentile(np.abs(r - 1.0), 90)) > DISC_FIT:
-        return None
-    return poly
+    return None if ellipse_misfit(pts[inner], ellipse) > DISC_FIT else poly
 
 
 def band_beyond(picture: np.ndarray, rim: np.ndarray) -> float:

@@ -69,6 +69,18 @@ def regions(
     return out
 
 
+def ellipse_misfit(points: np.ndarray, ellipse: tuple) -> float:
+    """How far 90 % of ``points`` (N x 2) lie from ``ellipse`` (`cv2.fitEllipse`'s: centre,
+    full axes, degrees), as a share of its radius: each point read on the unit circle
+    the ellipse maps to."""
+    (cx, cy), (a, b), angle = ellipse
+    t = np.deg2rad(angle)
+    u, v = np.array([np.cos(t), np.sin(t)]), np.array([-np.sin(t), np.cos(t)])
+    off = np.asarray(points, np.float64).reshape(-1, 2) - [cx, cy]
+    radii = np.hypot(off @ u / (a / 2.0), off @ v / (b / 2.0))
+    return float(np.percentile(np.abs(radii - 1.0), 90))
+
+
 def css_polygon(contour: np.ndarray, count: int) -> np.ndarray | None:
     """The ``count`` curvature-scale-space corners of a closed contour, in contour
     order, when it finds that many and their polygon is positively oriented; else None."""
