@@ -11,10 +11,11 @@ the floor's level around the board (a board lighter or darker than its floor
 alike), as far as they reach; a board that does not stand out of its floor's noise
 is none. A board whose H is no mark of the threshold at all (strokes under a pixel)
 may be a hole of it, the floor right around it read lighter than its local mean:
-such a hole is taken for a board as it is. Where they make a quadrilateral of the
-pad's proportions, the whole pad (H and marks) is fitted to the edges inside it
-from each of its four turns (and from each inset border's, where the board may
-have stopped), taken affine (so small, its perspective is noise), and kept when
+such a hole is taken for a board as it is, and so is a mark of it where the board
+is as light as its H (a white sheet around a dark octagon). Where they make a
+quadrilateral of the pad's proportions, the whole pad (H and marks) is fitted to the
+edges inside it from each of its four turns (and from each inset border's, where the
+board may have stopped), taken affine (so small, its perspective is noise), and kept when
 many of its H's sides and some of its board's outline are found where the fit puts
 them, and the picture inside matches the reference's, the H telling which of the
 board's turns is the pad's.
@@ -125,7 +126,8 @@ def find_boards(
     """Homographies (pad metres -> view pixels) of the pads found by their boards,
     best pattern first, on a view's smoothed channel (``levels``), around its
     regions of the H's polarity (``shapes``, `pipeline.find.search`'s) and where
-    the threshold left a board whole, a hole of its mask (``holes``); ``enlarged``:
+    the threshold left a board whole, a hole of its mask (``holes``) or, a board as
+    light as the H, one of the regions itself; ``enlarged``:
     view pixels per frame pixel; ``chroma``: the view's box (x0, y0, x1, y1) read on the
     board's chroma (`pipeline.preprocess.chroma_levels`), made when asked for."""
     rounded = reference.round_board
@@ -163,9 +165,15 @@ def find_boards(
         )
     ]
     whole = [] if ratio is None else [
-        _board_of_hole(levels, hole, least_board, widest * ratio)
+        _board_whole(levels, hole, least_board, widest * ratio)
         for hole in sorted(holes, key=lambda r: -r.area)
     ]  # fmt: skip
+    if ratio is not None and reference.outline_bright:
+        # (serif_octagon's sheet 15 m away: its H, inside the octagon, no region at all)
+        whole += [
+            _board_whole(levels, shape, least_board, widest * ratio, bright=True)
+            for shape in sorted(shapes, key=lambda r: -r.area)
+        ]
     boards: list[Board] = []
     for board in grown + [b for b in whole if b is not None]:
         if not any(b.round == board.round and _same(board.quad, b.quad) for b in boards):
@@ -277,21 +285,27 @@ def _boards_in(
     return boards
 
 
-def _board_of_hole(levels: np.ndarray, hole: Region, min_px: float, max_px: float) -> Board | None:
-    """The board a hole of the mask is, when it is a quadrilateral between ``min_px``
-    and ``max_px`` wide that stands out of the floor around it.
+def _board_whole(
+    levels: np.ndarray, region: Region, min_px: float, max_px: float, *, bright: bool = False
+) -> Board | None:
+    """The board a hole of the mask is (or, ``bright``, a region of it), when it is a
+    quadrilateral between ``min_px`` and ``max_px`` wide that stands out of the floor
+    around it.
 
     A board darker than its floor on the channel (the H's paint bright) is left
     whole by the local threshold: the floor right around it reads lighter than its
     local mean, a halo with the board for its hole, where the H inside, its strokes a
-    pixel wide, is lost (paper_ring's sheet from 5 m on at 640 x 480).
+    pixel wide, is lost (paper_ring's sheet from 5 m on at 640 x 480). A board as
+    light as the H (`Reference.outline_bright`) is a region of the mask itself, and
+    stands out by its lightest tenth (its dark octagon with the H, most of it, the
+    octagon's hole).
     """
-    x, y, w, h = hole.box
+    x, y, w, h = region.box
     span = float(max(w, h))
     if not min_px <= span <= max_px:
         return None
-    quad = _quad_of(hole.contour.reshape(-1, 1, 2).astype(np.int32))
-    if quad is None or not _FILL[0] <= hole.area / _area(quad) <= _FILL[1]:
+    quad = _quad_of(region.contour.reshape(-1, 1, 2).astype(np.int32))
+    if quad is None or not _FILL[0] <= region.area / _area(quad) <= _FILL[1]:
         return None
     # Its level against the floor's, in a window with a margin of floor around it.
     m = int(0.25 * span) + 3
@@ -303,7 +317,10 @@ def _board_of_hole(levels: np.ndarray, hole: Region, min_px: float, max_px: floa
     inside = cv2.erode(inside, _CROSS, iterations=2)
     if not inside.any():
         return None
-    contrast = abs(float(np.median(win[inside > 0])) - floor)
+    if bright:
+        contrast = float(np.percentile(win[inside > 0], 90.0)) - floor
+    else:
+        contrast = abs(float(np.median(win[inside > 0])) - floor)
     if contrast < MIN_BOARD_CONTRAST or noise > MAX_FLOOR_NOISE * contrast:
         return None
     return Board(_clockwise(quad), contrast)

@@ -28,6 +28,7 @@ from pipeline.jit import compiled, pixels, plain
 from pipeline.planar_projection import plane_pixels, project_plane
 
 MIN_SIDE_PX = 7.0  # sides shorter than this in the image are not sampled
+RESOLVED_PX = 1.0  # a side nearer a side alongside it than this is not told from it
 END_MARGIN = 0.12  # at most this share of a straight side is left out at each end
 END_MARGIN_OF_EXTENT = 0.02  # and at most this share of the model's size
 MODEL_SAMPLES = 600  # points along all the model's sides, spread by length
@@ -208,13 +209,17 @@ def fit_edges(
     return None if result is None else EdgeFit(*result)
 
 
-def edge_support(image: np.ndarray, model: EdgeModel, camera: Camera, rvec, tvec) -> float:
-    """Share of samples along all the pad's visible sides that sit on a real edge.
+def edge_support(
+    image: np.ndarray, model: EdgeModel, camera: Camera, rvec, tvec, *, resolved_px: float = 0.0
+) -> float:
+    """Share of samples along all the pad's visible sides that sit on a real edge;
+    with ``resolved_px``, along those that lie at least that far from a side alongside
+    them (`RESOLVED_PX`: the sides a frame tells apart).
 
     A look-alike shape can fit the H's corners, but the dark board around it,
     the side bars and the board's outline will not be where the pose says.
     """
-    pa, pb, usable = _sides_in_view(model, camera, rvec, tvec, 0.0)
+    pa, pb, usable = _sides_in_view(model, camera, rvec, tvec, resolved_px)
     proj = plane_pixels(model.samples[0], rvec, tvec, camera)
     return kernels.pose_support(
         pixels(image), pa, pb, model.bright, model.polygon,

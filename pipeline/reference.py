@@ -228,6 +228,13 @@ class Reference:
         return border >= 0.5 * float(np.dot(weights, self.board_bgr))
 
     @cached_property
+    def outline_bright(self) -> bool:
+        """Whether the board the picture's edge outlines is on the H's side of the
+        threshold that shapes the H (a white sheet around a dark octagon): in frames it
+        is a mark of the H's polarity, not a hole."""
+        return self.board_is_outline and float(np.median(border_pixels(self.mask, 2))) > 0.0
+
+    @cached_property
     def round_board(self) -> RoundBoard | None:
         """The H's board where it is round: the largest mark around the H that is a
         circle (or near one: an octagon's sides' middles lie 8 % within its corners) and

@@ -20,8 +20,8 @@ from pipeline.bench.frames import SCENE_EVERY, make_scenes, make_view
 from pipeline.bench.hint import gravity_hint
 from pipeline.bench.tally import Tally
 from pipeline.board_search import (
-    _board_of_hole,
     _board_outlines,
+    _board_whole,
     _clockwise,
     _fit_board,
     _floor_and_noise,
@@ -156,7 +156,7 @@ def test_a_board_the_threshold_left_whole_is_read_from_its_hole():
     # A board darker than its floor: the floor around it is the mask's, the board a hole.
     levels, corners = _square_on_a_floor(50.0, 60.0)
     (hole,) = [h for h in _holes(levels, 170.0, 60.0) if h.area > 500]
-    board = _board_of_hole(levels, hole, 24.0, 200.0)
+    board = _board_whole(levels, hole, 24.0, 200.0)
     assert board is not None and 100.0 <= board.contrast <= 120.0, board
     # Its corners, clockwise on screen, within a pixel and a half of the square's.
     offset = np.abs(board.quad[:, None, :] - corners[None, :, :]).max(axis=2).min(axis=1)
@@ -176,7 +176,7 @@ def test_a_hole_that_is_no_board_is_none(what, side, board, disc, least):
     levels, _ = _square_on_a_floor(side, board, disc=disc)
     holes = [h for h in _holes(levels, 170.0, board) if h.area > 100]
     assert holes  # (there is a hole to read)
-    assert all(_board_of_hole(levels, h, least, 200.0) is None for h in holes), what
+    assert all(_board_whole(levels, h, least, 200.0) is None for h in holes), what
 
 
 def _paper_posed_by_its_board(point: int, altitude: float, j: int) -> Tally:

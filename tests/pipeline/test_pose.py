@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from pipeline import Camera, Reference
-from pipeline.edgefit import edge_support, fit_edges
+from pipeline.edgefit import RESOLVED_PX, EdgeModel, edge_support, fit_edges
 from pipeline.pose import (
     ippe_candidates,
     pick_by_yaw,
@@ -76,6 +76,32 @@ def test_edge_fit_recovers_the_pose_from_a_disturbed_start(reference):
     # Where there is no pad, the pad's edges are not found.
     blank = binarize(np.full_like(frame, 120), "otsu").smooth
     assert edge_support(blank, reference.edge_model, CAM, fit.rvec, fit.tvec) < 0.1
+
+
+def test_edge_support_counts_only_the_sides_a_frame_tells_apart(reference):
+    # A thin ring the pad does not have, drawn around its H at 2 mm (under half a pixel
+    # 3 m away), is not looked for; at 3 cm it is, and not found, it lowers the support.
+    R = camera_rotation(20.0, tilt_deg=3.0)
+    truth = Pose(np.array([0.1, 0.2, 3.0]), R, 0.0, True)
+    frame = render(
+        make_scene(make_pad_image(800), 0.55, rng=np.random.default_rng(1)),
+        CAM,
+        truth.position_m,
+        R,
+    )
+    smooth = binarize(frame, "otsu").smooth
+    rvec, tvec = pose_to_vectors(truth)
+    square = np.array([(-0.2, -0.2), (0.2, -0.2), (0.2, 0.2), (-0.2, 0.2)])
+    h = [(reference.corners_m, True)]
+    alone = edge_support(
+        smooth, EdgeModel.from_polygons(h), CAM, rvec, tvec, resolved_px=RESOLVED_PX
+    )
+    assert alone > 0.9
+    for width_m, unchanged in ((0.002, True), (0.03, False)):
+        ring = [(square, True), (square * (1.0 - width_m / 0.2), False)]
+        model = EdgeModel.from_polygons(h + ring)
+        support = edge_support(smooth, model, CAM, rvec, tvec, resolved_px=RESOLVED_PX)
+        assert (support == pytest.approx(alone)) is unchanged, (width_m, support, alone)
 
 
 def test_the_pads_up_is_opencvs_rotations_third_column_to_the_bit():
