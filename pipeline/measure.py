@@ -231,10 +231,10 @@ def measure(
                 continue
             if gravity is None and with_marks and not ambiguous:
                 ambiguous = _read_otherwise(reference, levels, cam, Hv, start, Hs, fit, view)
-            # What counts the pose is the edges a frame this fine can tell apart: far
-            # away serif_octagon's double rim (four octagons 5-8 mm apart, one from 3-5
-            # m on 640 x 480) was counted unfound, and poses of its sheet 15 m away
-            # within 3-6 % of the altitude found 0.17-0.20 of the pad's edges, 0.29-0.32
+            # The pose counts by the edges a frame this fine tells apart:
+            # serif_octagon's double rim (four octagons 5-8 mm apart, under a pixel
+            # apart from 3-5 m on at 640 x 480) was counted unfound, and poses of its
+            # sheet 15 m away, 2-8 % off, found 0.17-0.20 of the pad's edges, 0.29-0.32
             # of those told apart. (The fits above weigh a polish by all the edges: by
             # those told apart, the design bench's views without the attitude came
             # further off, serif_octagon's p95 2.08 -> 2.90 %.)

@@ -21,7 +21,7 @@ from tests.pipeline.bench_support import design_reference, sweep_frames
 CAM = Camera.from_fov(640, 480, 60.0)
 
 
-def test_only_a_sheet_lighter_than_its_h_board_is_a_light_outline():
+def test_only_a_sheet_as_light_as_its_h_is_a_light_outline():
     assert design_reference("serif_octagon").outline_bright
     for design in ("default", "dark_on_light", "thin", "paper_ring", "icao", "red_on_black"):
         assert not design_reference(design).outline_bright, design

@@ -79,8 +79,9 @@ def test_edge_fit_recovers_the_pose_from_a_disturbed_start(reference):
 
 
 def test_edge_support_counts_only_the_sides_a_frame_tells_apart(reference):
-    # A thin ring the pad does not have, drawn around its H at 2 mm (under half a pixel
-    # 3 m away), is not looked for; at 3 cm it is, and not found, it lowers the support.
+    # A ring the pad does not have, put in its model around the H: 2 mm wide (under half
+    # a pixel 3 m away) it is not looked for; 3 cm wide it is, and, not found, lowers the
+    # support.
     R = camera_rotation(20.0, tilt_deg=3.0)
     truth = Pose(np.array([0.1, 0.2, 3.0]), R, 0.0, True)
     frame = render(
