@@ -11,6 +11,7 @@ housekeeper (:mod:`.housekeeping`) build on it.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import queue
 import threading
@@ -19,6 +20,8 @@ from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from backend.link import streams
 from backend.link.commands import AckTracker
@@ -68,6 +71,7 @@ class LinkCore:
     _latest: dict[str, Any]
     _target: tuple[int, int] | None
     _last_hb: float | None
+    _hb_sent_at: float  # monotonic time of our last HEARTBEAT sent
     _rebooting_until: float
     _rx_count: int
     _handler_errors: int
@@ -94,6 +98,23 @@ class LinkCore:
         if transport is None:
             raise SendError("the link has not been started")
         transport.send(msg)
+
+    def _send_heartbeat(self) -> None:
+        """Our HEARTBEAT (a GCS's), where a transport is open to send it on."""
+        transport = self._transport
+        if transport is None or not transport.is_open:
+            return
+        msg = mavlink2.MAVLink_heartbeat_message(
+            mavlink2.MAV_TYPE_GCS,
+            mavlink2.MAV_AUTOPILOT_INVALID,
+            0,
+            0,
+            mavlink2.MAV_STATE_ACTIVE,
+            3,
+        )
+        self._hb_sent_at = time.monotonic()
+        with contextlib.suppress(SendError):  # the reader notices a dead transport
+            transport.send(msg)
 
     def _time_boot_ms(self) -> int:
         return int((time.monotonic() - self._t0) * 1000) & 0xFFFFFFFF

@@ -8,8 +8,6 @@ import logging
 import time
 from collections import deque
 
-from pymavlink.dialects.v20 import ardupilotmega as mavlink2
-
 from backend.link import streams
 from backend.link.connection import SendError
 from backend.link.core import _TICK_S, LinkCore
@@ -23,7 +21,6 @@ class LinkHousekeeping(LinkCore):
 
     # ------------------------------------------------------------------ housekeeping thread
     def _housekeeping_loop(self) -> None:
-        next_heartbeat = 0.0
         next_flush = 0.0
         rates: deque[tuple[float, int]] = deque(maxlen=32)
         while not self._stop.is_set():
@@ -33,8 +30,7 @@ class LinkHousekeeping(LinkCore):
                 break
             now = time.monotonic()
             try:
-                if now >= next_heartbeat:
-                    next_heartbeat = now + 1.0
+                if now >= self._hb_sent_at + 1.0:  # (the reader sends one on connecting)
                     self._send_heartbeat()
                 self._check_heartbeat(now)
                 self._manage_streams(now)
@@ -45,21 +41,6 @@ class LinkHousekeeping(LinkCore):
             except Exception:
                 self._handler_errors += 1
                 log.exception("vehicle link housekeeping failed")
-
-    def _send_heartbeat(self) -> None:
-        transport = self._transport
-        if transport is None or not transport.is_open:
-            return
-        msg = mavlink2.MAVLink_heartbeat_message(
-            mavlink2.MAV_TYPE_GCS,
-            mavlink2.MAV_AUTOPILOT_INVALID,
-            0,
-            0,
-            mavlink2.MAV_STATE_ACTIVE,
-            3,
-        )
-        with contextlib.suppress(SendError):  # the reader notices a dead transport
-            transport.send(msg)
 
     def _check_heartbeat(self, now: float) -> None:
         last = self._last_hb

@@ -72,7 +72,10 @@ class LinkReceiver(LinkCore):
                 # a new connection (SITL restarts its process): what answers is the new boot
                 self._rebooting_until = 0.0
                 self._apply({"reconnects": max(0, transport.opened - 1)})
-                self._wake.set()  # heartbeat at once: a UDP/TCP vehicle learns about us
+                # Our heartbeat at once, from this thread: a UDP/TCP vehicle learns about
+                # us, and it goes out before anything the vehicle sends is read (left to
+                # the housekeeper, a loaded machine had it miss a session of 0.1 s).
+                self._send_heartbeat()
                 continue
             try:
                 msg = transport.recv_msg()

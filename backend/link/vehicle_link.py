@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import math
 import queue
 import threading
 import time
@@ -145,6 +146,7 @@ class VehicleLink(LinkCommands, LinkReceiver, LinkHousekeeping):
         self._closed = False
         self._stop = threading.Event()
         self._wake = threading.Event()
+        self._hb_sent_at = -math.inf
         self._threads: list[threading.Thread] = []
         self._t0 = time.monotonic()
 
