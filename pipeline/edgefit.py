@@ -227,6 +227,12 @@ def edge_support(
     )  # fmt: skip
 
 
+def sides_told_apart(model: EdgeModel, camera: Camera, rvec, tvec) -> bool:
+    """Whether every side lies `RESOLVED_PX` or more from a side alongside it (then
+    `edge_support` counts the same with ``resolved_px`` as without)."""
+    return bool(_sides_in_view(model, camera, rvec, tvec, RESOLVED_PX)[2].all())
+
+
 def _clearance_m(
     a: np.ndarray, b: np.ndarray, polygon: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

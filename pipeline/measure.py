@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 
 from pipeline.camera import Camera
-from pipeline.edgefit import RESOLVED_PX, EdgeFit, edge_support, fit_edges
+from pipeline.edgefit import RESOLVED_PX, EdgeFit, edge_support, fit_edges, sides_told_apart
 from pipeline.homography_fit import (
     MIN_CLEARANCE_PX,
     MIN_SIDE_PX,
@@ -238,9 +238,11 @@ def measure(
             # of those told apart. (The fits above weigh a polish by all the edges: by
             # those told apart, the design bench's views without the attitude came
             # further off, serif_octagon's p95 2.08 -> 2.90 %.)
-            told_apart = edge_support(
-                levels, reference.edge_model, cam, fit.rvec, fit.tvec, resolved_px=RESOLVED_PX
-            )
+            told_apart = support
+            if not sides_told_apart(reference.edge_model, cam, fit.rvec, fit.tvec):
+                told_apart = edge_support(
+                    levels, reference.edge_model, cam, fit.rvec, fit.tvec, resolved_px=RESOLVED_PX
+                )
             return Measured(view.to_frame @ H_try, fit, told_apart, ambiguous, told, lean)
     return None
 
