@@ -18,7 +18,9 @@ edges inside it from each of its four turns (and from each inset border's, where
 board may have stopped), taken affine (so small, its perspective is noise), and kept when
 many of its H's sides and some of its board's outline are found where the fit puts
 them, and the picture inside matches the reference's, the H telling which of the
-board's turns is the pad's.
+board's turns is the pad's. A board of a colour is then placed by its outline on that
+colour where it is found there (from afar its H's strokes are too thin and blurred to
+place it).
 
 Only a pad whose picture is its board (every border pixel of the reference the
 same level: `Reference.board_is_outline`) is looked for so, or one whose H's board is
@@ -92,6 +94,15 @@ QUARTER_MARGIN = 0.08
 # Its pose counts when the pad's edges are found where it puts them: the bench's far
 # boards posed within 3 % of the altitude found 0.22-0.5 of them, those 10-40 % off, 0.07-0.13.
 MIN_BOARD_SUPPORT = 0.2
+# ... or, a square board of a colour, when its outline is found where the pose puts it
+# on its chroma; there too it is placed by that outline, wherever it is found so
+# (CHROMA_PLACED of it). Fitted on the channel, thin's board 15 m away (its H's strokes
+# 1.3 px, blurred) posed 8-10 % off and found 0.14-0.18 of its edges; placed by its
+# outline on its chroma (stepping 35-55 against the channel's 20), 0.8-2.7 %.
+CHROMA_PLACED = 0.8
+# ... looked for this far (view pixels) from where the H's fit puts it: on the view
+# enlarged twice, 3 px left two of one such board's sides unfound.
+CHROMA_SEARCH_PX = 6.0
 MIN_BOARD_SHARE = 0.3  # of the quadrilateral, at the board's level (not the mark's)
 _QUAD_EPS = 0.06  # Douglas-Peucker tolerance, of the hull's perimeter
 _FILL = (0.75, 1.25)  # the grown board's area over its quadrilateral's
@@ -594,6 +605,8 @@ def _fit_board(
         best = (best[0], _turned_to_pattern(levels, reference, best[1]))
     if best is not None and _turn_untold(levels, reference, best[1]):
         return None
+    if best is not None and not round_board:
+        best = (best[0], _placed_by_chroma(chroma, reference, best[1]))
     return best
 
 
@@ -684,22 +697,86 @@ def _outline_in_chroma(
     `find_boards`): on grass, thin's blue board stepped 20-25 levels on its H's channel
     against a noise of 6-14, and none of its outline was found where, 8.7-10.9 m away,
     its faint H was refused; on its chroma it steps some 60."""
-    if chroma is None or k is None:
-        return False
-    corners = reference.marks[k].corners_m
-    px = apply_h(H, corners)
+    return k is not None and _chroma_support(chroma, reference, H, k) >= MIN_OUTLINE_FOUND
+
+
+def chroma_outline_found(
+    chroma: Callable[[tuple[int, int, int, int]], np.ndarray] | None,
+    reference: Reference,
+    H: np.ndarray,
+) -> float:
+    """The share of a square board's outline found where ``H`` (pad metres -> view
+    pixels) puts it on the board's chroma; 0 where it is not read so (no chroma, a
+    round board, put off the view)."""
+    k = _square_outline(reference)
+    return 0.0 if k is None else _chroma_support(chroma, reference, H, k)
+
+
+def _placed_by_chroma(
+    chroma: Callable[[tuple[int, int, int, int]], np.ndarray] | None,
+    reference: Reference,
+    H: np.ndarray,
+) -> np.ndarray:
+    """``H`` refitted, affine, to its square board's outline on the board's chroma,
+    where it finds ``CHROMA_PLACED`` of it there; else ``H`` itself."""
+    k = _square_outline(reference)
+    read = None if k is None else _chroma_around(chroma, reference, H, k)
+    if k is None or read is None:
+        return H
+    levels, shift = read
+    model = _outline_model(reference, k)
+    fit = fit_homography(
+        levels, model, shift @ H, iterations=3, search_px=CHROMA_SEARCH_PX, sides_alike=False
+    )
+    if fit is None:
+        return H
+    placed = affine_part(fit.H, np.zeros(2))  # (as `_fit_board`'s: so small, no perspective)
+    if support(levels, model, placed) < CHROMA_PLACED:
+        return H
+    return np.linalg.inv(shift) @ placed
+
+
+def _square_outline(reference: Reference) -> int | None:
+    """The board's outline among the reference's marks where the board is square."""
+    return None if reference.round_board is not None else _outline_mark(reference)
+
+
+def _chroma_support(
+    chroma: Callable[[tuple[int, int, int, int]], np.ndarray] | None,
+    reference: Reference,
+    H: np.ndarray,
+    k: int,
+) -> float:
+    """The share of mark ``k``'s outline found where ``H`` puts it on the board's chroma."""
+    read = _chroma_around(chroma, reference, H, k)
+    if read is None:
+        return 0.0
+    levels, shift = read
+    return support(levels, _outline_model(reference, k), shift @ H)
+
+
+def _chroma_around(
+    chroma: Callable[[tuple[int, int, int, int]], np.ndarray] | None,
+    reference: Reference,
+    H: np.ndarray,
+    k: int,
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """The board's chroma in a box around where ``H`` puts mark ``k``, and the shift
+    from the view's pixels to the box's; None where there is none to read."""
+    if chroma is None:
+        return None
+    px = apply_h(H, reference.marks[k].corners_m)
     if not np.isfinite(px).all():
-        return False
+        return None
     x0, y0 = np.floor(px.min(axis=0)).astype(int) - _CHROMA_MARGIN
     x1, y1 = np.ceil(px.max(axis=0)).astype(int) + _CHROMA_MARGIN
     x0, y0 = max(int(x0), 0), max(int(y0), 0)
     if x1 <= x0 or y1 <= y0:
-        return False  # (put off the view)
+        return None  # (put off the view)
     levels = chroma((x0, y0, int(x1), int(y1)))
     if min(levels.shape) < 2 * _CHROMA_MARGIN:
-        return False
-    shift = np.array([[1.0, 0.0, -x0], [0.0, 1.0, -y0], [0.0, 0.0, 1.0]])
-    return support(levels, _outline_model(reference, k), shift @ H) >= MIN_OUTLINE_FOUND
+        return None
+    return levels, np.array([[1.0, 0.0, -x0], [0.0, 1.0, -y0], [0.0, 0.0, 1.0]])
 
 
 @functools.lru_cache(maxsize=8)

@@ -33,7 +33,13 @@ from typing import NamedTuple
 import cv2
 import numpy as np
 
-from pipeline.board_search import MIN_BOARD_PX, MIN_BOARD_SUPPORT, find_boards
+from pipeline.board_search import (
+    CHROMA_PLACED,
+    MIN_BOARD_PX,
+    MIN_BOARD_SUPPORT,
+    chroma_outline_found,
+    find_boards,
+)
 from pipeline.camera import Camera
 from pipeline.candidates import MIN_EVIDENCE, fit_h_sides
 from pipeline.find import (
@@ -285,11 +291,21 @@ def process_frame(
                 if not verifier.accepts(h_px, h_px, far.camera(cam)):
                     tally.rejected += 1
                     continue
+            # A board placed by its outline on its chroma (`board_search.CHROMA_PLACED`)
+            # is judged there: its H's channel may show none of the pad's edges.
+            placed = chroma_outline_found(chroma, reference, H) >= CHROMA_PLACED
             measured = measure(
-                image, reference, cam, to_frame @ H, gravity=gravity, found=(far, far_binary.smooth)
-            )
+                image, reference, cam, to_frame @ H, gravity=gravity,
+                found=(far, far_binary.smooth), placed=placed,
+            )  # fmt: skip
             stages.lap("board")
-            if measured is not None and measured.support >= MIN_BOARD_SUPPORT:
+            if measured is None:
+                continue
+            if measured.support >= MIN_BOARD_SUPPORT or (
+                placed
+                and chroma_outline_found(chroma, reference, far.matrix @ measured.H)
+                >= CHROMA_PLACED
+            ):
                 outline = apply_h(measured.H, reference.corners_m)
                 return _detected(
                     measured, reference, outline, yaw_hint, "board", mask, stages, t_start, prior

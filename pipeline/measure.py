@@ -163,10 +163,14 @@ def measure(
     *,
     gravity: np.ndarray | None,
     found: tuple[View, np.ndarray] | None = None,
+    placed: bool = False,
 ) -> Measured | None:
     """Measure the pad located by ``H`` (pad metres -> pixels of ``frame``, whose
     camera is ``camera``). ``found``: the view the H was found in and its smoothed
-    channel, used again when it is already as fine as a measurement needs."""
+    channel, used again when it is already as fine as a measurement needs.
+    ``placed``: ``H`` placed by the pad's edges on another picture than the channel
+    (a coloured board's outline on its chroma), the caller to judge the pose there:
+    the channel need not show the pad's edges (``MIN_EDGES_FOUND``)."""
     if not seen_from_above(H, reference.corners_m):
         return None  # (a fit folded or mirrored: no pad lying level looks so)
     outline = pad_box_m(reference)
@@ -225,7 +229,8 @@ def measure(
             fit, support, ambiguous, lean = fitted
             if camera_height_m(fit.rvec, fit.tvec) <= 0.0:
                 continue  # (edges taken astray can fit a camera under the ground)
-            if support < MIN_EDGES_FOUND and (
+            unfound = not placed and support < MIN_EDGES_FOUND
+            if unfound and (
                 edge_support(levels, reference.h_edges, cam, fit.rvec, fit.tvec) < MIN_EDGES_FOUND
             ):
                 continue
