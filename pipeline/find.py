@@ -73,7 +73,9 @@ MAX_HUE = 0.3  # the board's chromaticity, L1 distance to the reference's
 # paint's median reads a little under 255 where a shadow, blur or JPEG lowers some of
 # its pixels: 243-244 on the real-world mix's overexposed, shadowed views of ICAO pads.
 SATURATED_LUMA, CLIPPED_GAIN = 240.0, 1.5
-REJUDGE_BELOW_PX = 24.0  # marks smaller than this (frame pixels) are judged in every view
+# Marks smaller than this (frame pixels, or pixels of the view that refused them) are
+# judged in every view.
+REJUDGE_BELOW_PX = 24.0
 # A first look (a coarse view) looks at marks at least this wide (its pixels): on the
 # altitude sweep's 640 x 480 frames at 9-16 m, the H's of 7-9 of its pixels it fitted
 # and turned down cost it 3-8 ms a frame; those of 12 px and more at 7 m, it takes.
@@ -128,9 +130,9 @@ class Tally:
     def judged(self, box: np.ndarray) -> bool:
         """Whether a mark in ``box`` (frame pixels) was turned down already.
 
-        A mark large enough to judge at the search's resolution is judged the same
-        on another threshold's mask or a finer view: its fit and checks work on the
-        frame's levels, not on the mask. Smaller marks are judged again (a finer
+        A mark large enough to judge at the resolution it was seen at is judged the
+        same on another threshold's mask or a finer view: its fit and checks work on
+        the frame's levels, not on the mask. Smaller marks are judged again (a finer
         view is what they need)."""
         if _size(box) < REJUDGE_BELOW_PX:
             return False
@@ -143,8 +145,14 @@ class Tally:
         alike = [b for b, at, how in self.seen if how == method and math.isclose(at, scale)]
         return _near_any(box, alike, 0.08)
 
-    def turn_down(self, box: np.ndarray) -> None:
-        self.turned_down.append(box)
+    def turn_down(self, box: np.ndarray, scale: float = 1.0) -> None:
+        """A mark in ``box`` (frame pixels) refused on a view of ``scale`` (its pixels a
+        frame pixel): not judged again where it spanned ``REJUDGE_BELOW_PX`` there (a
+        1280 x 720 frame's H of 24-30 px, 12-15 on the working view, its strokes a
+        pixel and a half, was refused there and never looked at again at the frame's
+        own resolution, where it was clear)."""
+        if _size(box) * scale >= REJUDGE_BELOW_PX:
+            self.turned_down.append(box)
 
     def refused(self, box: np.ndarray, evidence: float, enlarged: float) -> None:
         """A located mark refused: kept for a closer look when it was small and seen
@@ -267,7 +275,7 @@ def _hits(
         hit = locate(cand, binary, reference)
         stages.lap("corners")
         if hit is None:
-            tally.turn_down(box)
+            tally.turn_down(box, scale)
             continue
         tally.located += 1
         verdict = _check(hit, image, binary, reference, full=not tracking, enlarged=enlarged)
@@ -275,7 +283,7 @@ def _hits(
         if verdict:
             setattr(tally, verdict, getattr(tally, verdict) + 1)
             if verdict != "unclear":  # (the region's own levels: another mask may differ)
-                tally.turn_down(box)
+                tally.turn_down(box, scale)
             tally.refused(box, hit.evidence, enlarged)
             continue
         if verifier is not None:
@@ -284,7 +292,7 @@ def _hits(
             stages.lap("verify")
             if not accepted:
                 tally.rejected += 1
-                tally.turn_down(box)
+                tally.turn_down(box, scale)
                 tally.refused(box, hit.evidence, enlarged)
                 continue
         yield hit
