@@ -60,6 +60,12 @@ MIN_BOARD_CONTRAST = 8.0  # the board against its floor, levels of 0..255
 MAX_FLOOR_NOISE = 0.35
 MAX_SEEDS = 48  # marks a board is grown around per frame at most
 MAX_LARGE_SEEDS = 4  # and at most this many marks larger than a far H (a spoilt H's)
+# ... and the marks most alone (the fewest pixels of the mask around them, over a box the
+# board's size for them), this many more: on a textured floor the largest marks are the
+# floor's. paper_ring's H's 6.5 m away (12 view px, on its plain sheet) ranked 100-160th
+# of 300-900 marks by area, 0-2nd by that emptiness.
+MAX_LONE_SEEDS = 8
+LONE_REACH = 0.4  # the box's half-width, of the mark's size times the board's over the H's
 MAX_BOARDS = 6  # quadrilaterals fitted per frame at most, the most contrasted first
 # A fitted pad counts when its pattern matches the reference's (NCC), and 40 % of its
 # H's sides and 10 % of its board's outline are found where the fit puts them. On the
@@ -133,10 +139,12 @@ def find_boards(
     enlarged: float,
     holes: Sequence[Region] = (),
     chroma: Callable[[tuple[int, int, int, int]], np.ndarray] | None = None,
+    mask: np.ndarray | None = None,
 ) -> list[np.ndarray]:
     """Homographies (pad metres -> view pixels) of the pads found by their boards,
     best pattern first, on a view's smoothed channel (``levels``), around its
-    regions of the H's polarity (``shapes``, `pipeline.find.search`'s) and where
+    regions of the H's polarity (``shapes``, `pipeline.find.search`'s, the marks of
+    its ``mask``: the most alone of them as well as the largest) and where
     the threshold left a board whole, a hole of its mask (``holes``) or, a board as
     light as the H, one of the regions itself; ``enlarged``:
     view pixels per frame pixel; ``chroma``: the view's box (x0, y0, x1, y1) read on the
@@ -167,10 +175,13 @@ def find_boards(
             large.append(region)
     small.sort(key=lambda r: -r.area)
     large.sort(key=lambda r: -r.area)
+    seeds = small[:MAX_SEEDS] + large[:MAX_LARGE_SEEDS]
+    if mask is not None and len(small) > MAX_SEEDS:
+        seeds += _lone(small[MAX_SEEDS:], mask, LONE_REACH * min(ratios))[:MAX_LONE_SEEDS]
     least_board = MIN_BOARD_PX * enlarged
     grown = [
         board
-        for seed in small[:MAX_SEEDS] + large[:MAX_LARGE_SEEDS]
+        for seed in seeds
         for board in _grow_boards(
             levels, seed, ratio, least_board, round_ratio=round_ratio, chroma=chroma
         )
@@ -205,6 +216,28 @@ def find_boards(
             found.append(fitted)
     found.sort(key=lambda f: -f[0])
     return [H for _, H in found]
+
+
+def _lone(marks: list[Region], mask: np.ndarray, reach: float) -> list[Region]:
+    """``marks`` the most alone first: by the share of ``mask`` set around each, over
+    a box ``reach`` times its size from its centre (the mark's own box left out)."""
+    counts = cv2.integral(mask)  # (set is 255: the shares' order is the same)
+    h_img, w_img = mask.shape
+    scored = []
+    for mark in marks:
+        x, y, w, h = mark.box
+        half = reach * mark.span
+        x0, y0 = max(int(x + 0.5 * w - half), 0), max(int(y + 0.5 * h - half), 0)
+        x1, y1 = min(int(x + 0.5 * w + half), w_img), min(int(y + 0.5 * h + half), h_img)
+        around = _box_count(counts, x0, y0, x1, y1) - _box_count(counts, x, y, x + w, y + h)
+        cells = (x1 - x0) * (y1 - y0) - w * h
+        scored.append((around / max(cells, 1), -mark.area))
+    order = sorted(range(len(marks)), key=scored.__getitem__)
+    return [marks[i] for i in order]
+
+
+def _box_count(counts: np.ndarray, x0: int, y0: int, x1: int, y1: int) -> int:
+    return int(counts[y1, x1] - counts[y0, x1] - counts[y1, x0] + counts[y0, x0])
 
 
 def _grow_boards(

@@ -282,8 +282,9 @@ def process_frame(
         if reference.board_chroma is not None and picture.ndim == 3 and has_colour(picture):
             chroma = functools.partial(_chroma_of, picture, reference.board_chroma)
         boards = find_boards(
-            far_binary.smooth, shapes, reference, max(1.0, far.scale), holes, chroma
-        )
+            far_binary.smooth, shapes, reference, max(1.0, far.scale), holes, chroma,
+            far_binary.mask,
+        )  # fmt: skip
         for H in boards:
             if verifier is not None:
                 # The verifier judges the H the board puts where it is, as any H.
