@@ -10,6 +10,7 @@ best shape first; the first whose pose can be measured is the pad's.
 from __future__ import annotations
 
 import functools
+import itertools
 import math
 import time
 from collections.abc import Callable, Iterator
@@ -34,6 +35,7 @@ from pipeline.homography_fit import apply_h, span_of
 from pipeline.measure import MIN_MARKS_FOUND, pad_box_m, pad_marks
 from pipeline.preprocess import Binarized
 from pipeline.reference import Reference
+from pipeline.ring_cut import cut_from_rings
 from pipeline.shapes import Region, regions
 from pipeline.strokes import MAX_NOTCH_FILL, cut_through, notch_fill, stroke_samples
 from pipeline.template import compare, pad_pattern, pattern_box
@@ -239,8 +241,19 @@ def search(
     found = regions(binary.mask, min_area=MIN_H_AREA_PX, max_area=0.5 * area, holes=holes)
     tally.shapes += len(found)
     stages.lap("contours")
-    return binary, found, _hits(found, image, binary, reference, camera, verifier, tally, stages,
-                                to_frame, tracking, enlarged, first_look, method)  # fmt: skip
+    hits = functools.partial(_hits, image=image, binary=binary, reference=reference,
+                             camera=camera, verifier=verifier, tally=tally, stages=stages,
+                             to_frame=to_frame, tracking=tracking, enlarged=enlarged,
+                             first_look=first_look, method=method)  # fmt: skip
+
+    def cut_hits() -> Iterator[Located]:
+        # Then an H the blur joined to its ring, cut from it (asked for only when the
+        # regions as they are hold no H). Where the cut falls is the view's: an H refused
+        # so is judged again on a finer view (icao_circle's at 91 m, fitted 1.30 on the
+        # working view, 1.46 on the doubled one).
+        yield from hits(cut_from_rings(found, binary.mask, reference), lasting=False)
+
+    return binary, found, itertools.chain(hits(found), cut_hits())
 
 
 def _hits(
@@ -257,10 +270,17 @@ def _hits(
     enlarged: float,
     first_look: bool,
     method: str,
+    lasting: bool = True,
 ) -> Iterator[Located]:
     # (what a first look turns down is not recorded: the working view judges it again)
     tally = Tally() if first_look else tally
     scale = 1.0 / float(to_frame[0, 0])  # (view pixels a frame pixel)
+
+    def turn_down(box: np.ndarray) -> None:
+        # (not ``lasting``: regions that are the view's making, judged again on the next)
+        if lasting:
+            tally.turn_down(box, scale)
+
     if first_look:
         # A first look is for a near pad's large H: smaller marks are judged on the
         # working view all the same.
@@ -275,7 +295,7 @@ def _hits(
         hit = locate(cand, binary, reference)
         stages.lap("corners")
         if hit is None:
-            tally.turn_down(box, scale)
+            turn_down(box)
             continue
         tally.located += 1
         verdict = _check(hit, image, binary, reference, full=not tracking, enlarged=enlarged)
@@ -283,7 +303,7 @@ def _hits(
         if verdict:
             setattr(tally, verdict, getattr(tally, verdict) + 1)
             if verdict != "unclear":  # (the region's own levels: another mask may differ)
-                tally.turn_down(box, scale)
+                turn_down(box)
             tally.refused(box, hit.evidence, enlarged)
             continue
         if verifier is not None:
@@ -292,7 +312,7 @@ def _hits(
             stages.lap("verify")
             if not accepted:
                 tally.rejected += 1
-                tally.turn_down(box, scale)
+                turn_down(box)
                 tally.refused(box, hit.evidence, enlarged)
                 continue
         yield hit

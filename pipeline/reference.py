@@ -266,6 +266,33 @@ class Reference:
         return found
 
     @cached_property
+    def ring_cut(self) -> float | None:
+        """Where an H ringed in its own paint is cut from its ring (the innermost such
+        ring): a radius between the H's farthest corner and the ring's inside, over the
+        ring's outer radius; None where no ring of the H's paint is round about the H.
+        From afar the blur joins the H's tips to it (icao_circle's at 90 m and more at
+        640 x 480: 1.5 px between them), and the two make one region that is no H
+        (`pipeline.ring_cut`)."""
+        centre = self.h_centre_m
+        reach = float(np.hypot(*(self.corners_m - centre).T).max())
+        best: tuple[float, float] | None = None  # (the ring's outer radius, the cut's)
+        for ring in (m for m in self.marks if m.bright and not m.rim):
+            outer = _round_radius(ring.corners_m, centre)
+            if outer is None or outer <= reach or (best is not None and outer >= best[0]):
+                continue
+            # (its inside: the largest mark of the board's level within it)
+            insides = [
+                r
+                for m in self.marks
+                if not m.bright
+                and (r := _round_radius(m.corners_m, centre)) is not None
+                and reach < r < outer
+            ]
+            if insides:
+                best = (outer, 0.5 * (reach + max(insides)))
+        return None if best is None else best[1] / best[0]
+
+    @cached_property
     def board_chroma(self) -> np.ndarray | None:
         """The board's own colour apart from its lightness: the unit BGR weights of its
         chroma (summing to 0, so that a grey of any lightness reads 0 on them and the
@@ -890,3 +917,15 @@ def _pixels_to_metres(width: int, height: int, pad_size_m: float):
         return np.column_stack([x, y])
 
     return convert
+
+
+def _round_radius(corners_m: np.ndarray, centre_m: np.ndarray) -> float | None:
+    """The radius of a polygon that is a circle about ``centre_m`` (every corner within
+    ``_ROUND_TOL`` of its radius from it), else None."""
+    if len(corners_m) < 8:
+        return None
+    radii = np.hypot(*(corners_m - centre_m).T)
+    radius = float(radii.mean())
+    if float(np.abs(radii - radius).max()) > _ROUND_TOL * radius:
+        return None
+    return radius
