@@ -67,7 +67,9 @@ def test_an_h_joined_to_its_ring_is_cut_out_as_an_h():
     assert x <= lo[0] + 1 and y <= lo[1] + 1 and x + w >= hi[0] and y + h >= hi[1]
     outer = 24.5  # (the ring's outer radius, pixels)
     reach = np.hypot(*(cut[0].contour - 60.0).T).max()
-    assert reach <= reference.ring_cut * outer + 1.5  # (its outline: the pixels outside it)
+    # (+1.5: the ellipse is fitted to the ring's outermost pixels' centres, and the cut's
+    # outline runs through its own outermost pixels)
+    assert reach <= reference.ring_cut * outer + 1.5
     assert candidates(cut, reference)
 
 
